@@ -1,0 +1,288 @@
+//! Procedural generators for procfit: a parameter vector in, a mesh out.
+//!
+//! Every generator implements [`Generator`]: a parameter spec (names, labels, groups, ranges,
+//! kinds), named presets, `generate(params, lod) -> Mesh`, and for the differentiable ones a
+//! vector–Jacobian product that turns dL/d(vertex positions) into dL/d(params) (the paper's
+//! eq. 2). Differentiable generators are written once over a scalar type so that the mesh and
+//! its Jacobian come from the same code.
+//!
+//! Conventions used by every generator:
+//! - Y is up, units are metres-like, the object stands on or around the origin.
+//! - Triangles are counter-clockwise seen from outside (outward normals by the right-hand rule).
+//! - Positions are welded: a point shared by several triangles has one index, also along UV
+//!   seams and hard edges. Normals and UVs are stored per triangle corner, so seams and creases
+//!   need no duplicate positions; exporters split vertices where corners disagree.
+
+use glam::{Vec2, Vec3};
+use std::fmt;
+
+/// Level of detail, from the coarse mesh used during the fit to the export mesh.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Lod {
+    /// Coarsest: used by the first optimisation stage.
+    Low = 0,
+    /// Medium detail.
+    Medium = 1,
+    /// High detail.
+    High = 2,
+    /// Finest: for export.
+    Ultra = 3,
+}
+
+impl Lod {
+    /// All levels, coarse to fine.
+    pub const ALL: [Lod; 4] = [Lod::Low, Lod::Medium, Lod::High, Lod::Ultra];
+
+    /// The level for an index 0..=3, or `None`.
+    pub fn from_index(i: usize) -> Option<Lod> {
+        Self::ALL.get(i).copied()
+    }
+
+    /// The index 0..=3 of this level.
+    pub fn index(self) -> usize {
+        self as usize
+    }
+}
+
+/// What sort of value a parameter holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ParamKind {
+    /// A real number in `[min, max]`; differentiable generators give it a derivative.
+    Continuous,
+    /// A whole number in `[min, max]`; zero derivative.
+    Integer,
+    /// 0 or 1; zero derivative.
+    Boolean,
+    /// One of the named choices, stored as its index; zero derivative.
+    Categorical(&'static [&'static str]),
+}
+
+impl ParamKind {
+    /// Whether the parameter can receive a gradient.
+    pub fn is_continuous(self) -> bool {
+        matches!(self, ParamKind::Continuous)
+    }
+}
+
+/// Description of one parameter: what the optimiser, the page's sliders and the exporter see.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ParamSpec {
+    /// Stable machine name, used in params JSON and glTF extras (`snake_case`).
+    pub name: &'static str,
+    /// Human label for a slider.
+    pub label: &'static str,
+    /// Group the page shows the slider under (e.g. "Body", "Handle", "Windows").
+    pub group: &'static str,
+    /// Unit shown next to the value ("m", "°", "" for ratios and counts).
+    pub unit: &'static str,
+    /// Smallest allowed value.
+    pub min: f64,
+    /// Largest allowed value.
+    pub max: f64,
+    /// Default value (inside the range).
+    pub default: f64,
+    /// Kind of value.
+    pub kind: ParamKind,
+}
+
+/// A named parameter vector that looks like a real object.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Preset {
+    /// Stable machine name (e.g. `mug`).
+    pub name: &'static str,
+    /// Human label (e.g. "Mug").
+    pub label: &'static str,
+    /// One value per parameter, in spec order.
+    pub values: Vec<f64>,
+}
+
+/// A named part of a mesh (body, handle, wall, window glass, trunk, leaf…).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Part {
+    /// Stable name; becomes the glTF node and material name.
+    pub name: &'static str,
+    /// Default linear RGBA base colour for the part's material.
+    pub color: [f32; 4],
+}
+
+/// An indexed triangle mesh with per-corner attributes and a part id per triangle.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    /// Welded vertex positions.
+    pub positions: Vec<Vec3>,
+    /// Triangles as indices into `positions`, counter-clockwise seen from outside.
+    pub triangles: Vec<[u32; 3]>,
+    /// Unit normal of each triangle corner: `corner_normals[3 * t + k]` for corner `k` of
+    /// triangle `t`.
+    pub corner_normals: Vec<Vec3>,
+    /// Texture coordinate of each triangle corner, indexed like `corner_normals`.
+    pub corner_uvs: Vec<Vec2>,
+    /// Index into `parts` for each triangle.
+    pub tri_parts: Vec<u8>,
+    /// The parts this mesh is made of.
+    pub parts: Vec<Part>,
+}
+
+impl Mesh {
+    /// Checks the structural invariants every generator promises (lengths agree, indices in
+    /// range, finite values). Geometric checks (watertight, orientation) live in the tests.
+    pub fn check(&self) -> Result<(), GenError> {
+        let nt = self.triangles.len();
+        let bad = |what: String| Err(GenError::InvalidMesh(what));
+        if self.tri_parts.len() != nt {
+            return bad(format!("{} part ids for {} triangles", self.tri_parts.len(), nt));
+        }
+        if self.corner_normals.len() != 3 * nt || self.corner_uvs.len() != 3 * nt {
+            return bad("corner attribute count is not 3 × triangles".into());
+        }
+        let nv = self.positions.len() as u32;
+        if let Some(t) = self.triangles.iter().find(|t| t.iter().any(|&i| i >= nv)) {
+            return bad(format!("triangle {t:?} indexes past {nv} vertices"));
+        }
+        if let Some(&p) = self.tri_parts.iter().find(|&&p| usize::from(p) >= self.parts.len()) {
+            return bad(format!("part id {p} but only {} parts", self.parts.len()));
+        }
+        if !self.positions.iter().all(|p| p.is_finite())
+            || !self.corner_normals.iter().all(|n| n.is_finite())
+            || !self.corner_uvs.iter().all(|uv| uv.is_finite())
+        {
+            return bad("non-finite position, normal or uv".into());
+        }
+        Ok(())
+    }
+
+    /// Axis-aligned bounding box `(min, max)` of the positions, or `None` when empty.
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let first = *self.positions.first()?;
+        Some(
+            self.positions
+                .iter()
+                .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p))),
+        )
+    }
+}
+
+/// Everything that can go wrong when asking a generator for a mesh.
+#[derive(Clone, Debug, PartialEq)]
+pub enum GenError {
+    /// The parameter vector has the wrong number of values.
+    WrongLength {
+        /// How many the generator takes.
+        expected: usize,
+        /// How many were given.
+        got: usize,
+    },
+    /// A value is NaN or infinite.
+    NotFinite {
+        /// Name of the parameter.
+        name: &'static str,
+    },
+    /// The generator has no derivatives.
+    NotDifferentiable(&'static str),
+    /// The adjoint given to a vector–Jacobian product does not match the mesh.
+    AdjointLength {
+        /// Vertex count of the mesh.
+        expected: usize,
+        /// Length of the adjoint.
+        got: usize,
+    },
+    /// A generator produced a mesh that breaks its invariants (a bug; reported, not panicked).
+    InvalidMesh(String),
+}
+
+impl fmt::Display for GenError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            GenError::WrongLength { expected, got } => {
+                write!(f, "expected {expected} parameter values, got {got}")
+            }
+            GenError::NotFinite { name } => write!(f, "parameter `{name}` is not a finite number"),
+            GenError::NotDifferentiable(g) => write!(f, "generator `{g}` is not differentiable"),
+            GenError::AdjointLength { expected, got } => {
+                write!(f, "adjoint has {got} vertices, mesh has {expected}")
+            }
+            GenError::InvalidMesh(what) => write!(f, "generator produced an invalid mesh: {what}"),
+        }
+    }
+}
+
+impl std::error::Error for GenError {}
+
+/// Checks a parameter vector against a spec and returns it with every value clamped into its
+/// range, whole-number kinds rounded. Wrong length and NaN/∞ are errors; out-of-range values
+/// are clamped (documented behaviour, so sliders and optimisers can overshoot safely).
+pub fn sanitize_params(spec: &[ParamSpec], params: &[f64]) -> Result<Vec<f64>, GenError> {
+    if spec.len() != params.len() {
+        return Err(GenError::WrongLength { expected: spec.len(), got: params.len() });
+    }
+    spec.iter()
+        .zip(params)
+        .map(|(s, &v)| {
+            if !v.is_finite() {
+                return Err(GenError::NotFinite { name: s.name });
+            }
+            let v = v.clamp(s.min, s.max);
+            Ok(if s.kind.is_continuous() { v } else { v.round().clamp(s.min, s.max) })
+        })
+        .collect()
+}
+
+/// The reverse-mode derivative of one generated mesh: maps dL/d(positions) to dL/d(params).
+pub trait Vjp: Send + Sync {
+    /// Adds `Σ_v d_positions[v] · d(position v)/d(params)` into `d_params` (one entry per
+    /// parameter; discrete parameters get 0). Errors when `d_positions` does not have one entry
+    /// per mesh vertex.
+    fn vjp(&self, d_positions: &[Vec3], d_params: &mut [f64]) -> Result<(), GenError>;
+}
+
+/// A procedural generator.
+pub trait Generator: Send + Sync {
+    /// Stable machine name (`dish`, `building`, `tree`).
+    fn name(&self) -> &'static str;
+    /// Human label.
+    fn label(&self) -> &'static str;
+    /// Version of the parameterisation; bumped when a parameter's meaning changes.
+    fn version(&self) -> u32;
+    /// The parameters, in vector order.
+    fn params(&self) -> &[ParamSpec];
+    /// Named presets.
+    fn presets(&self) -> Vec<Preset>;
+    /// Whether [`Generator::generate_with_vjp`] is available.
+    fn differentiable(&self) -> bool;
+    /// Builds the mesh. Parameters are validated with [`sanitize_params`].
+    fn generate(&self, params: &[f64], lod: Lod) -> Result<Mesh, GenError>;
+    /// Builds the mesh and its vector–Jacobian product from the same code path.
+    fn generate_with_vjp(
+        &self,
+        params: &[f64],
+        lod: Lod,
+    ) -> Result<(Mesh, Box<dyn Vjp>), GenError> {
+        let _ = (params, lod);
+        Err(GenError::NotDifferentiable(self.name()))
+    }
+    /// A penalty that keeps shapes sane, and its gradient (same length as `params`). Zero by
+    /// default.
+    fn regularizer(&self, params: &[f64]) -> (f64, Vec<f64>) {
+        (0.0, vec![0.0; params.len()])
+    }
+
+    /// Default parameter vector.
+    fn defaults(&self) -> Vec<f64> {
+        self.params().iter().map(|p| p.default).collect()
+    }
+
+    /// The preset with this name.
+    fn preset(&self, name: &str) -> Option<Preset> {
+        self.presets().into_iter().find(|p| p.name == name)
+    }
+}
+
+/// Every generator procfit knows, in the order the page lists them.
+pub fn all() -> Vec<&'static dyn Generator> {
+    vec![]
+}
+
+/// The generator with this machine name.
+pub fn by_name(name: &str) -> Option<&'static dyn Generator> {
+    all().into_iter().find(|g| g.name() == name)
+}

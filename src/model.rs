@@ -1,0 +1,144 @@
+//! The params JSON: a generator's full state by name, shared by the CLI (`--params`,
+//! `--params-out`), the page (open/save) and the GLB scene `extras`.
+//!
+//! ```json
+//! { "generator": "dish", "version": 1, "params": { "height_scale": 0.8, ... }, "lod": 1, "seed": 7 }
+//! ```
+//!
+//! Reading is strict where a mistake would silently change the model (unknown generator, a name
+//! the generator does not have, a value that is not a finite number, a newer version) and lenient
+//! where it cannot (a missing parameter takes its default; values out of range are clamped by the
+//! generator).
+
+use crate::generators::{self, Generator, Lod, sanitize_params};
+use serde::{Deserialize, Serialize};
+use std::fmt;
+
+/// A generator's state as stored in params JSON and GLB extras.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ParamsDoc {
+    /// Generator machine name.
+    pub generator: String,
+    /// Version of the generator's parameterisation.
+    pub version: u32,
+    /// Every parameter by name, in spec order.
+    pub params: serde_json::Map<String, serde_json::Value>,
+    /// Level of detail 0..=3, when known.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lod: Option<u8>,
+    /// Random seed of the fit, when known.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub seed: Option<u64>,
+}
+
+/// A params document that cannot be used.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ModelError(pub String);
+
+impl fmt::Display for ModelError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for ModelError {}
+
+/// A generator with a concrete, validated parameter vector.
+#[derive(Clone)]
+pub struct Model {
+    /// The generator.
+    pub generator: &'static dyn Generator,
+    /// One value per parameter, validated and clamped.
+    pub params: Vec<f64>,
+    /// Level of detail.
+    pub lod: Lod,
+    /// Seed of the fit, when the model comes from one.
+    pub seed: Option<u64>,
+}
+
+impl fmt::Debug for Model {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Model")
+            .field("generator", &self.generator.name())
+            .field("params", &self.params)
+            .field("lod", &self.lod)
+            .field("seed", &self.seed)
+            .finish()
+    }
+}
+
+impl Model {
+    /// A model from a generator name and a raw parameter vector (validated).
+    pub fn new(generator: &str, params: &[f64], lod: Lod) -> Result<Model, ModelError> {
+        let g = generators::by_name(generator)
+            .ok_or_else(|| ModelError(format!("unknown generator `{generator}`")))?;
+        let params = sanitize_params(g.params(), params).map_err(|e| ModelError(e.to_string()))?;
+        Ok(Model { generator: g, params, lod, seed: None })
+    }
+
+    /// The document form of this model.
+    pub fn to_doc(&self) -> ParamsDoc {
+        let params = self
+            .generator
+            .params()
+            .iter()
+            .zip(&self.params)
+            .map(|(s, &v)| (s.name.to_string(), serde_json::Value::from(v)))
+            .collect();
+        ParamsDoc {
+            generator: self.generator.name().to_string(),
+            version: self.generator.version(),
+            params,
+            lod: Some(self.lod as u8),
+            seed: self.seed,
+        }
+    }
+
+    /// The model a document describes.
+    pub fn from_doc(doc: &ParamsDoc) -> Result<Model, ModelError> {
+        let g = generators::by_name(&doc.generator)
+            .ok_or_else(|| ModelError(format!("unknown generator `{}`", doc.generator)))?;
+        if doc.version > g.version() {
+            return Err(ModelError(format!(
+                "params are for {} version {}, this procfit knows version {}",
+                g.name(),
+                doc.version,
+                g.version()
+            )));
+        }
+        if let Some(unknown) = doc.params.keys().find(|k| !g.params().iter().any(|s| s.name == *k))
+        {
+            return Err(ModelError(format!("{} has no parameter `{unknown}`", g.name())));
+        }
+        let mut values = Vec::with_capacity(g.params().len());
+        for s in g.params() {
+            let v = match doc.params.get(s.name) {
+                None => s.default,
+                Some(v) => v.as_f64().ok_or_else(|| {
+                    ModelError(format!("parameter `{}` is not a number: {v}", s.name))
+                })?,
+            };
+            values.push(v);
+        }
+        let params = sanitize_params(g.params(), &values).map_err(|e| ModelError(e.to_string()))?;
+        let lod = match doc.lod {
+            None => Lod::Medium,
+            Some(i) => Lod::from_index(usize::from(i))
+                .ok_or_else(|| ModelError(format!("lod {i} is not in 0..=3")))?,
+        };
+        Ok(Model { generator: g, params, lod, seed: doc.seed })
+    }
+
+    /// Parses params JSON.
+    pub fn from_json(text: &str) -> Result<Model, ModelError> {
+        let doc: ParamsDoc =
+            serde_json::from_str(text).map_err(|e| ModelError(format!("params JSON: {e}")))?;
+        Model::from_doc(&doc)
+    }
+
+    /// Pretty params JSON.
+    pub fn to_json(&self) -> String {
+        // Serialising a struct of strings, numbers and maps cannot fail.
+        serde_json::to_string_pretty(&self.to_doc()).unwrap_or_default()
+    }
+}

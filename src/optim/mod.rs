@@ -1,0 +1,1 @@
+//! Optimisers: Adam, the memetic algorithm (GA + Adam local search) and their schedules.

@@ -1,0 +1,1 @@
+//! The reconstruction pipeline: cameras from masks, coarse-to-fine fit, evaluation.

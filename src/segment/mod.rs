@@ -1,0 +1,1 @@
+//! From photo to mask: decoding, orientation, downscaling and object segmentation.
