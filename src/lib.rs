@@ -13,6 +13,7 @@ pub use procfit_generators as generators;
 pub mod camera;
 pub mod glb;
 pub mod loss;
+pub mod mask;
 pub mod model;
 pub mod optim;
 pub mod reconstruct;

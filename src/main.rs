@@ -7,7 +7,11 @@ use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(name = "procfit", version, about = "Photo to editable procedural 3D model")]
+#[command(
+    name = "procfit",
+    version,
+    about = "Photo to editable procedural 3D model"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -38,7 +42,10 @@ fn main() -> ExitCode {
 
 fn list_generators(only: Option<&str>) -> Result<(), String> {
     let all = procfit::generators::all();
-    let chosen: Vec<_> = all.iter().filter(|g| only.is_none_or(|n| g.name() == n)).collect();
+    let chosen: Vec<_> = all
+        .iter()
+        .filter(|g| only.is_none_or(|n| g.name() == n))
+        .collect();
     if chosen.is_empty() {
         return Err(match only {
             Some(n) => format!("unknown generator `{n}`"),
@@ -48,7 +55,10 @@ fn list_generators(only: Option<&str>) -> Result<(), String> {
     for g in chosen {
         println!("{} — {} (version {})", g.name(), g.label(), g.version());
         for p in g.params() {
-            println!("  {:<28} {:<10} [{}, {}] {:?}", p.name, p.group, p.min, p.max, p.kind);
+            println!(
+                "  {:<28} {:<10} [{}, {}] {:?}",
+                p.name, p.group, p.min, p.max, p.kind
+            );
         }
         let presets: Vec<_> = g.presets().iter().map(|p| p.name).collect();
         println!("  presets: {}", presets.join(", "));

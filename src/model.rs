@@ -73,7 +73,12 @@ impl Model {
         let g = generators::by_name(generator)
             .ok_or_else(|| ModelError(format!("unknown generator `{generator}`")))?;
         let params = sanitize_params(g.params(), params).map_err(|e| ModelError(e.to_string()))?;
-        Ok(Model { generator: g, params, lod, seed: None })
+        Ok(Model {
+            generator: g,
+            params,
+            lod,
+            seed: None,
+        })
     }
 
     /// The document form of this model.
@@ -106,9 +111,15 @@ impl Model {
                 g.version()
             )));
         }
-        if let Some(unknown) = doc.params.keys().find(|k| !g.params().iter().any(|s| s.name == *k))
+        if let Some(unknown) = doc
+            .params
+            .keys()
+            .find(|k| !g.params().iter().any(|s| s.name == *k))
         {
-            return Err(ModelError(format!("{} has no parameter `{unknown}`", g.name())));
+            return Err(ModelError(format!(
+                "{} has no parameter `{unknown}`",
+                g.name()
+            )));
         }
         let mut values = Vec::with_capacity(g.params().len());
         for s in g.params() {
@@ -126,7 +137,12 @@ impl Model {
             Some(i) => Lod::from_index(usize::from(i))
                 .ok_or_else(|| ModelError(format!("lod {i} is not in 0..=3")))?,
         };
-        Ok(Model { generator: g, params, lod, seed: doc.seed })
+        Ok(Model {
+            generator: g,
+            params,
+            lod,
+            seed: doc.seed,
+        })
     }
 
     /// Parses params JSON.

@@ -130,7 +130,11 @@ impl Mesh {
         let nt = self.triangles.len();
         let bad = |what: String| Err(GenError::InvalidMesh(what));
         if self.tri_parts.len() != nt {
-            return bad(format!("{} part ids for {} triangles", self.tri_parts.len(), nt));
+            return bad(format!(
+                "{} part ids for {} triangles",
+                self.tri_parts.len(),
+                nt
+            ));
         }
         if self.corner_normals.len() != 3 * nt || self.corner_uvs.len() != 3 * nt {
             return bad("corner attribute count is not 3 × triangles".into());
@@ -139,7 +143,11 @@ impl Mesh {
         if let Some(t) = self.triangles.iter().find(|t| t.iter().any(|&i| i >= nv)) {
             return bad(format!("triangle {t:?} indexes past {nv} vertices"));
         }
-        if let Some(&p) = self.tri_parts.iter().find(|&&p| usize::from(p) >= self.parts.len()) {
+        if let Some(&p) = self
+            .tri_parts
+            .iter()
+            .find(|&&p| usize::from(p) >= self.parts.len())
+        {
             return bad(format!("part id {p} but only {} parts", self.parts.len()));
         }
         if !self.positions.iter().all(|p| p.is_finite())
@@ -213,7 +221,10 @@ impl std::error::Error for GenError {}
 /// are clamped (documented behaviour, so sliders and optimisers can overshoot safely).
 pub fn sanitize_params(spec: &[ParamSpec], params: &[f64]) -> Result<Vec<f64>, GenError> {
     if spec.len() != params.len() {
-        return Err(GenError::WrongLength { expected: spec.len(), got: params.len() });
+        return Err(GenError::WrongLength {
+            expected: spec.len(),
+            got: params.len(),
+        });
     }
     spec.iter()
         .zip(params)
@@ -222,7 +233,11 @@ pub fn sanitize_params(spec: &[ParamSpec], params: &[f64]) -> Result<Vec<f64>, G
                 return Err(GenError::NotFinite { name: s.name });
             }
             let v = v.clamp(s.min, s.max);
-            Ok(if s.kind.is_continuous() { v } else { v.round().clamp(s.min, s.max) })
+            Ok(if s.kind.is_continuous() {
+                v
+            } else {
+                v.round().clamp(s.min, s.max)
+            })
         })
         .collect()
 }

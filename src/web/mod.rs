@@ -54,7 +54,9 @@ pub fn thread_probe(jobs: u32) -> u32 {
             // A few milliseconds of arithmetic so that idle threads get to steal work.
             let mut x = u64::from(i) | 1;
             for _ in 0..400_000 {
-                x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                x = x
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
             }
             std::hint::black_box(x);
             rayon::current_thread_index().unwrap_or(usize::MAX)
@@ -141,7 +143,11 @@ pub fn generator_specs() -> Result<JsValue, JsError> {
             presets: g
                 .presets()
                 .into_iter()
-                .map(|p| Preset { name: p.name, label: p.label, values: p.values })
+                .map(|p| Preset {
+                    name: p.name,
+                    label: p.label,
+                    values: p.values,
+                })
                 .collect(),
         })
         .collect();
