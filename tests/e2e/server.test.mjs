@@ -1,0 +1,96 @@
+// The dev server: isolation headers on every response, MIME types, and no way out of its root.
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import http from 'node:http';
+import { mkdtempSync, writeFileSync, symlinkSync, mkdirSync, rmSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join } from 'node:path';
+import { spawnSync } from 'node:child_process';
+import { startServer, ROOT } from './harness.mjs';
+
+let server;
+let root;
+
+before(async () => {
+  root = mkdtempSync(join(tmpdir(), 'procfit-serve-'));
+  const outside = mkdtempSync(join(tmpdir(), 'procfit-outside-'));
+  writeFileSync(join(outside, 'secret.txt'), 'secret');
+  writeFileSync(join(root, 'index.html'), '<!doctype html><title>t</title>');
+  writeFileSync(join(root, 'a.wasm'), Buffer.from([0, 97, 115, 109]));
+  writeFileSync(join(root, 'a.js'), 'export {}');
+  writeFileSync(join(root, 'a.mjs'), 'export {}');
+  writeFileSync(join(root, 'a.glb'), 'glTF');
+  mkdirSync(join(root, 'sub'));
+  writeFileSync(join(root, 'sub', 'ok.txt'), 'ok');
+  symlinkSync(join(outside, 'secret.txt'), join(root, 'link-out.txt'));
+  symlinkSync(outside, join(root, 'dir-out'));
+  symlinkSync(join(root, 'sub', 'ok.txt'), join(root, 'link-in.txt'));
+  server = await startServer({ root });
+});
+
+after(() => {
+  server?.stop();
+  rmSync(root, { recursive: true, force: true });
+});
+
+/** A raw GET: node's http does not normalise the path, so `..` reaches the server as sent. */
+function get(path) {
+  const { port } = new URL(server.url);
+  return new Promise((resolve, reject) => {
+    const req = http.request({ host: '127.0.0.1', port, path, method: 'GET' }, (res) => {
+      let body = '';
+      res.on('data', (d) => (body += d));
+      res.on('end', () => resolve({ status: res.statusCode, headers: res.headers, body }));
+    });
+    req.on('error', reject);
+    req.end();
+  });
+}
+
+/** `status` is a code or a list of acceptable codes (403 or 404 both keep a path out). */
+function check(path, status, type) {
+  const ok = [status].flat();
+  test(`GET ${path} → ${ok.join(' or ')}`, async () => {
+    const res = await get(path);
+    assert.ok(ok.includes(res.status), `status ${res.status}`);
+    assert.equal(res.headers['cross-origin-opener-policy'], 'same-origin');
+    assert.equal(res.headers['cross-origin-embedder-policy'], 'require-corp');
+    if (type) assert.equal(res.headers['content-type'], type);
+    if (!ok.includes(200)) assert.ok(!res.body.includes('secret'));
+  });
+}
+
+check('/', 200, 'text/html; charset=utf-8');
+check('/a.wasm', 200, 'application/wasm');
+check('/a.js', 200, 'text/javascript; charset=utf-8');
+check('/a.mjs', 200, 'text/javascript; charset=utf-8');
+check('/a.glb', 200, 'model/gltf-binary');
+check('/sub/ok.txt', 200);
+check('/link-in.txt', 200);
+check('/missing.txt', 404);
+check('/../secret.txt', 403);
+check('/sub/../../secret.txt', 403);
+check('/%2e%2e/secret.txt', 403);
+check('/%2E%2E/%2e%2e/etc/passwd', 403);
+check('/sub/%2e%2e%2f%2e%2e%2fetc/passwd', 403);
+// Python collapses a leading `//` to `/` before we see it: that stays inside the root.
+check('//etc/passwd', [403, 404]);
+check('/..%5c..%5cetc%5cpasswd', 403);
+check('/a.js%00.html', 403);
+check('/link-out.txt', 403);
+check('/dir-out/secret.txt', 403);
+
+test('binds loopback only', () => {
+  assert.match(server.url, /^http:\/\/127\.0\.0\.1:\d+\/$/);
+});
+
+test('a busy port gets a one-line message that suggests PORT=', () => {
+  const { port } = new URL(server.url);
+  const r = spawnSync('python3', [join(ROOT, 'scripts', 'serve.py'), '--root', root, '--port', port], {
+    encoding: 'utf8',
+    timeout: 10000,
+  });
+  assert.notEqual(r.status, 0);
+  assert.match(r.stderr, /busy.*PORT=/);
+  assert.equal(r.stderr.trim().split('\n').length, 1);
+});
