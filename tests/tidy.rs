@@ -1,0 +1,173 @@
+//! Tidy checks: the invariants ARCHITECTURE.md states as absences, enforced over the source tree
+//! (after rust-analyzer's tidy test). Each check names the files that break it.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Every `.rs` file under `dir`, skipping build output.
+fn rust_files(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let Ok(entries) = fs::read_dir(dir) else {
+        return out;
+    };
+    for entry in entries.flatten() {
+        let path = entry.path();
+        let name = entry.file_name();
+        if name == "target" || name == "node_modules" || name == "pkg" {
+            continue;
+        }
+        if path.is_dir() {
+            out.extend(rust_files(&path));
+        } else if path.extension().is_some_and(|e| e == "rs") {
+            out.push(path);
+        }
+    }
+    out.sort();
+    out
+}
+
+fn source_dirs() -> Vec<PathBuf> {
+    ["src", "generators", "tests", "benches", "fuzz/fuzz_targets"]
+        .iter()
+        .map(|d| root().join(d))
+        .collect()
+}
+
+fn read(path: &Path) -> String {
+    fs::read_to_string(path).unwrap_or_default()
+}
+
+fn rel(path: &Path) -> String {
+    path.strip_prefix(root())
+        .unwrap_or(path)
+        .display()
+        .to_string()
+}
+
+/// Lines of `text` that are code (not comments), trimmed.
+fn code_lines(text: &str) -> impl Iterator<Item = &str> {
+    text.lines()
+        .map(str::trim)
+        .filter(|l| !l.starts_with("//") && !l.starts_with("*") && !l.starts_with("/*"))
+}
+
+#[test]
+fn every_rust_file_opens_with_a_module_doc() {
+    let offenders: Vec<String> = source_dirs()
+        .iter()
+        .flat_map(|d| rust_files(d))
+        .filter(|p| !read(p).trim_start().starts_with("//!"))
+        .map(|p| rel(&p))
+        .collect();
+    assert!(
+        offenders.is_empty(),
+        "files without a leading //! doc: {offenders:#?}"
+    );
+}
+
+#[test]
+fn only_src_web_talks_to_javascript() {
+    let web = root().join("src").join("web");
+    let offenders: Vec<String> = source_dirs()
+        .iter()
+        .flat_map(|d| rust_files(d))
+        .filter(|p| !p.starts_with(&web))
+        .filter(|p| {
+            code_lines(&read(p)).any(|l| {
+                ["wasm_bindgen", "web_sys", "js_sys", "serde_wasm_bindgen"]
+                    .iter()
+                    .any(|c| l.contains(&format!("{c}::")) || l.contains(&format!("use {c}")))
+            })
+        })
+        .map(|p| rel(&p))
+        .collect();
+    assert!(
+        offenders.is_empty(),
+        "JS bindings outside src/web/: {offenders:#?}"
+    );
+}
+
+#[test]
+fn library_code_never_reads_the_clock() {
+    // `std::time::Instant::now()` panics on wasm32-unknown-unknown; timing belongs to benchmarks,
+    // tests, the CLI and the JS side.
+    let lib_dirs = [root().join("src"), root().join("generators").join("src")];
+    let allowed = [
+        root().join("src").join("main.rs"),
+        root().join("src").join("cli"),
+    ];
+    let offenders: Vec<String> = lib_dirs
+        .iter()
+        .flat_map(|d| rust_files(d))
+        .filter(|p| !allowed.iter().any(|a| p.starts_with(a)))
+        .filter(|p| {
+            let text = read(p);
+            // Test modules may time things; only non-test code counts.
+            let code = text.split("#[cfg(test)]").next().unwrap_or("");
+            code_lines(code).any(|l| l.contains("Instant::now") || l.contains("SystemTime::now"))
+        })
+        .map(|p| rel(&p))
+        .collect();
+    assert!(
+        offenders.is_empty(),
+        "library code reading the clock: {offenders:#?}"
+    );
+}
+
+#[test]
+fn the_web_edge_denies_unwrap() {
+    let text = read(&root().join("src").join("web").join("mod.rs"));
+    assert!(
+        text.contains("#![deny(clippy::unwrap_used, clippy::expect_used)]"),
+        "src/web/mod.rs must deny unwrap and expect"
+    );
+}
+
+#[test]
+fn no_unlicensed_paper_data_in_the_repository() {
+    // ../shared/data/paper/ carries no licence: its files must never be copied in. Their names
+    // are distinctive; their contents start with the authors' block format.
+    let markers = [
+        "building_test_2",
+        "dishes_gen_presets",
+        "buildings_2_gen",
+        "ge_gen_param_borders",
+    ];
+    let mut offenders = Vec::new();
+    let mut stack = vec![root()];
+    while let Some(dir) = stack.pop() {
+        let Ok(entries) = fs::read_dir(&dir) else {
+            continue;
+        };
+        for entry in entries.flatten() {
+            let path = entry.path();
+            let name = entry.file_name().to_string_lossy().to_string();
+            if [
+                ".git",
+                "target",
+                "node_modules",
+                "pkg",
+                "pkg-st",
+                "dist",
+                "test-artifacts",
+            ]
+            .contains(&name.as_str())
+            {
+                continue;
+            }
+            if path.is_dir() {
+                stack.push(path);
+            } else if name.ends_with(".blk") || markers.iter().any(|m| name.contains(m)) {
+                offenders.push(rel(&path));
+            }
+        }
+    }
+    assert!(
+        offenders.is_empty(),
+        "files that look like the unlicensed paper data: {offenders:#?}"
+    );
+}
