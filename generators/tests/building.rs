@@ -428,3 +428,20 @@ fn bad_input_is_an_error_not_a_panic() {
         Building.generate(&tame, Lod::High)
     );
 }
+
+#[test]
+fn buildings_are_flat_shaded() {
+    let m = Building
+        .generate(&Building.preset("villa").expect("villa").values, Lod::Ultra)
+        .expect("generate");
+    for (t, tri) in m.triangles.iter().enumerate() {
+        let [a, b, c] = tri.map(|i| m.positions[i as usize]);
+        let face = (b - a).cross(c - a).normalize();
+        for k in 0..3 {
+            assert!(
+                m.corner_normals[3 * t + k].dot(face) > 0.9999,
+                "triangle {t}"
+            );
+        }
+    }
+}
