@@ -585,6 +585,21 @@ fn header_length_below_12_is_an_error_not_an_overflow() {
     }
 }
 
+/// Regression: gltf-json 1.4.1's validation indexes the POSITION accessor without a bounds
+/// check; a dangling POSITION index panicked inside `validate` (found by `glb_fuzz`).
+#[test]
+fn dangling_position_accessor_is_an_error_not_a_panic_in_gltf_json() {
+    let (_, glb) = lantern(Lod::Low);
+    let bad = edit_json(&glb, |j| {
+        j["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = json!(4096)
+    });
+    check_err(
+        "dangling POSITION",
+        &bad,
+        "POSITION accessor 4096 does not exist",
+    );
+}
+
 #[test]
 fn export_rejects_bad_meshes_and_cameras() {
     let check = |mesh: &Mesh, cams: &[ExportCamera], want: &str| {
