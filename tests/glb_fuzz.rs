@@ -112,7 +112,7 @@ fn mutate(base: &[u8], rng: &mut Rng) -> Vec<u8> {
 #[test]
 fn thousands_of_mutated_glbs_never_panic_the_importer() {
     let seeds = seeds();
-    let mut rng = Rng(0x0dd_b1a5_e5);
+    let mut rng = Rng(0x0ddb_1a5e);
     let (mut ok, mut err) = (0usize, 0usize);
     for case in 0..20_000 {
         let base = &seeds[case % seeds.len()];
