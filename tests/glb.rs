@@ -573,6 +573,35 @@ fn bad_input_gives_clear_errors() {
     );
 }
 
+#[test]
+fn instancing_one_mesh_from_many_nodes_is_capped() {
+    // 70 000 triangles instanced from 61 nodes: 4.27 M triangles, past the 4 Mi cap.
+    let glb = write_glb(&strip(70_002), None, &[]).unwrap();
+    let bomb = edit_json(&glb, |j| {
+        let nodes = j["nodes"].as_array_mut().unwrap();
+        for _ in 0..60 {
+            nodes.push(json!({"mesh": 0}));
+        }
+        let n = nodes.len();
+        let scene = j["scenes"][0]["nodes"].as_array_mut().unwrap();
+        scene.extend((n - 60..n).map(|i| json!(i)));
+    });
+    check_err("instancing bomb", &bomb, "more than 4194304 triangles");
+    // Fewer instances import.
+    let fine = edit_json(&glb, |j| {
+        j["nodes"].as_array_mut().unwrap().push(json!({"mesh": 0}));
+        let n = j["nodes"].as_array().unwrap().len();
+        j["scenes"][0]["nodes"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!(n - 1));
+    });
+    assert_eq!(
+        import_glb(&fine).unwrap().reference.triangles.len(),
+        140_000
+    );
+}
+
 /// Regression: `gltf::binary::Glb::from_slice` subtracts 12 from the declared length without a
 /// check, which panicked (overflow) on headers declaring fewer than 12 bytes.
 #[test]

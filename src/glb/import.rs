@@ -14,9 +14,10 @@ use json::validation::Checked::Valid;
 use std::borrow::Cow;
 use std::collections::HashMap;
 
-/// Most triangles (and vertices) an import produces, after node instancing: 16 Mi triangles is
-/// ~200 MB of indices, far beyond any model procfit fits or overlays.
-pub const MAX_TRIANGLES: usize = 1 << 24;
+/// Most triangles (and vertices) an import produces, after node instancing. A small hostile file
+/// can instance one mesh from thousands of nodes; 4 Mi triangles (~70 MB of geometry) is far
+/// beyond any model procfit fits or overlays and still fits a browser tab.
+pub const MAX_TRIANGLES: usize = 1 << 22;
 
 /// A triangle soup for evaluation and overlays: positions in world space (node transforms
 /// applied), exactly equal positions welded, triangles counter-clockwise seen from outside when
@@ -345,6 +346,18 @@ impl Builder<'_> {
             else {
                 continue;
             };
+            // Refuse before reading when the declared sizes already exceed the cap.
+            let declared = |a: json::Index<json::Accessor>| {
+                self.root.accessors.get(a.value()).map_or(0, |a| a.count.0)
+            };
+            let declared_corners = primitive.indices.map_or(declared(pos_accessor), declared);
+            if (self.mesh.triangles.len() as u64).saturating_add(declared_corners / 3)
+                > MAX_TRIANGLES as u64
+            {
+                return Err(GlbError::TooLarge(format!(
+                    "more than {MAX_TRIANGLES} triangles after node instancing"
+                )));
+            }
             let positions = self.read_positions(pos_accessor.value(), &what)?;
             let indices = match primitive.indices {
                 Some(a) => self.read_indices(a.value(), positions.len(), &what)?,
