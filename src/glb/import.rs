@@ -652,3 +652,27 @@ pub fn import_obj(bytes: &[u8]) -> Result<ReferenceMesh, GlbError> {
     mesh.part_names.push("obj".into());
     Ok(mesh)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use json::mesh::Mode;
+
+    #[test]
+    fn strips_and_fans_become_triangles_with_the_first_triangles_winding() {
+        let check = |mode, idx: &[u32], want: &[u32]| {
+            assert_eq!(triangulate(mode, idx), want, "{mode:?} {idx:?}");
+        };
+        check(Mode::Triangles, &[0, 1, 2, 3, 4], &[0, 1, 2]);
+        check(Mode::Triangles, &[], &[]);
+        check(
+            Mode::TriangleStrip,
+            &[0, 1, 2, 3, 4],
+            &[0, 1, 2, 1, 3, 2, 2, 3, 4],
+        );
+        check(Mode::TriangleStrip, &[5, 6], &[]);
+        check(Mode::TriangleFan, &[0, 1, 2, 3], &[1, 2, 0, 2, 3, 0]);
+        check(Mode::TriangleFan, &[7], &[]);
+        check(Mode::Lines, &[0, 1, 2], &[]);
+    }
+}
