@@ -574,6 +574,19 @@ fn bad_input_gives_clear_errors() {
 }
 
 #[test]
+fn json_chunk_padded_with_nuls_still_imports() {
+    let (_, glb) = lantern(Lod::Low);
+    let (j, bin) = take_apart(&glb);
+    let mut text = serde_json::to_vec(&j).unwrap();
+    text.resize(text.len().next_multiple_of(4) + 4, 0);
+    let padded = frame(&text, &bin);
+    let want = import_glb(&glb).unwrap();
+    let got = import_glb(&padded).unwrap();
+    assert_eq!(got.reference, want.reference);
+    assert_eq!(got.doc(), want.doc());
+}
+
+#[test]
 fn instancing_one_mesh_from_many_nodes_is_capped() {
     // 70 000 triangles instanced from 61 nodes: 4.27 M triangles, past the 4 Mi cap.
     let glb = write_glb(&strip(70_002), None, &[]).unwrap();

@@ -114,7 +114,12 @@ pub fn import_glb(bytes: &[u8]) -> Result<ImportedGlb, GlbError> {
             e.valid_up_to()
         ));
     }
-    let root = json::Root::from_slice(json_chunk)
+    // The chunk is padded with spaces; some writers pad with NULs, which JSON parsers reject.
+    let end = json_chunk
+        .iter()
+        .rposition(|&b| b != 0)
+        .map_or(0, |i| i + 1);
+    let root = json::Root::from_slice(&json_chunk[..end])
         .map_err(|e| GlbError::Malformed(format!("glTF JSON: {e}")))?;
     validate(&root)?;
 
