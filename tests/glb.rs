@@ -142,8 +142,17 @@ fn real_generators_round_trip_to_identical_model_and_mesh() {
                 let mut model = Model::new(g.name(), &preset.values, lod).unwrap();
                 model.seed = Some(42);
                 let glb = export_model(&model, &[]).unwrap();
-                let back = import_glb(&glb).unwrap().model().unwrap();
+                let imported = import_glb(&glb).unwrap();
+                let back = imported.model().unwrap();
                 let what = format!("{} {} {lod:?}", g.name(), preset.name);
+                // One named node per part that has triangles, in part order.
+                let mesh = g.generate(&model.params, lod).unwrap();
+                let parts: Vec<&str> = (0..mesh.parts.len())
+                    .filter(|&p| mesh.tri_parts.iter().any(|&t| usize::from(t) == p))
+                    .map(|p| mesh.parts[p].name)
+                    .collect();
+                assert_eq!(imported.reference.part_names, parts, "{what}");
+                assert_eq!(imported.reference.triangles.len(), mesh.triangles.len());
                 assert_eq!(back.generator.name(), g.name(), "{what}");
                 assert_eq!(
                     back.params.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
