@@ -61,6 +61,9 @@ pub const MAX_SIDE: u32 = 8192;
 /// Distance (pixels) from a boundary point to where its outside winding number is sampled.
 const OUTSIDE_PROBE: f64 = 1e-4;
 
+/// Most visibility cuts kept within one pixel crossing of an edge.
+const MAX_CUTS: usize = 8;
+
 /// Edge structure of a triangle list: unique undirected edges and, per triangle, its three
 /// edges with their direction. Depends only on the indices, so a fit computes it once per
 /// discrete mesh structure and reuses it while positions change.
@@ -513,12 +516,11 @@ impl Renderer {
         let hf = self.height as f64;
         self.row_start.clear();
         self.row_start.resize(h + 1, 0);
+        // Horizontal edges never change a winding number but can hide part of another edge,
+        // so they are registered too (for the visibility cuts).
         let span = |a: DVec2, b: DVec2| -> Option<(usize, usize)> {
-            if a.y == b.y {
-                return None;
-            }
             let (y0, y1) = (a.y.min(b.y).max(-1.0), a.y.max(b.y).min(hf + 1.0));
-            if y0 >= y1 {
+            if y0 > y1 {
                 return None;
             }
             let r0 = (y0.floor().max(0.0) as usize).min(h - 1);
@@ -656,6 +658,49 @@ impl EdgeCtx<'_> {
         w
     }
 
+    /// The parameters `t0 < cuts… < t1` where other silhouette edges cross `a + t·d` inside
+    /// pixel row `row`, sorted, written into `out`; returns how many were written. Beyond
+    /// [`MAX_CUTS`] crossings in one pixel the extra cuts are dropped (midpoint visibility).
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "hot inner helper over plain values"
+    )]
+    fn cuts(
+        &self,
+        e: &RemEdge,
+        a: DVec2,
+        d: DVec2,
+        t0: f64,
+        t1: f64,
+        row: usize,
+        out: &mut [f64; MAX_CUTS + 2],
+    ) -> usize {
+        out[0] = t0;
+        let mut n = 1;
+        for &k in &self.row_edges[self.row_start[row] as usize..self.row_start[row + 1] as usize] {
+            let o = self.rem[k as usize];
+            if o.a == e.a && o.b == e.b {
+                continue;
+            }
+            let c = self.screen[o.a as usize];
+            let f = self.screen[o.b as usize] - c;
+            let den = d.perp_dot(f);
+            if den == 0.0 {
+                continue;
+            }
+            let ac = c - a;
+            let t = ac.perp_dot(f) / den;
+            let u = ac.perp_dot(d) / den;
+            if t > t0 && t < t1 && (0.0..=1.0).contains(&u) && n <= MAX_CUTS {
+                out[n] = t;
+                n += 1;
+            }
+        }
+        out[1..n].sort_unstable_by(f64::total_cmp);
+        out[n] = t1;
+        n + 1
+    }
+
     /// `[∫ adj·(1 − t) dt, ∫ adj·t dt]` over the visible pixel crossings of one edge.
     fn integrate(&self, e: &RemEdge) -> [f64; 2] {
         let (a, b) = (self.screen[e.a as usize], self.screen[e.b as usize]);
@@ -710,10 +755,19 @@ impl EdgeCtx<'_> {
                 let px = (mid.x.floor().max(0.0) as usize).min(w - 1);
                 let py = (mid.y.floor().max(0.0) as usize).min(self.height as usize - 1);
                 let adj = f64::from(self.adjoint[py * w + px]);
-                if adj != 0.0 && self.winding(mid + probe) == 0 {
-                    let (l, sq) = (t1 - t0, 0.5 * (t1 * t1 - t0 * t0));
-                    ia += adj * (l - sq);
-                    ib += adj * sq;
+                if adj != 0.0 {
+                    // Visibility can only change where another silhouette edge crosses this
+                    // one: cut the crossing there and test each piece at its midpoint.
+                    let mut cuts = [0.0f64; MAX_CUTS + 2];
+                    let n = self.cuts(e, a, d, t0, t1, py, &mut cuts);
+                    for piece in cuts[..n].windows(2) {
+                        let (u0, u1) = (piece[0], piece[1]);
+                        if self.winding(a + d * (0.5 * (u0 + u1)) + probe) == 0 {
+                            let (l, sq) = (u1 - u0, 0.5 * (u1 * u1 - u0 * u0));
+                            ia += adj * (l - sq);
+                            ib += adj * sq;
+                        }
+                    }
                 }
             }
             if tx <= t1 {
