@@ -30,7 +30,12 @@
 //! slot per item and the reductions run sequentially in a fixed order, so results are
 //! bit-identical with and without rayon.
 
+pub mod labels;
+pub mod multiview;
 pub mod testmesh;
+
+pub use labels::LabelRenderer;
+pub use multiview::MultiViewLoss;
 
 use crate::camera::{N_VIEW_PARAMS, View};
 use glam::{DVec2, DVec3, Vec3};
@@ -293,19 +298,10 @@ impl Renderer {
         let n = positions.len();
         self.screen.resize(n, DVec2::ZERO);
         self.cam.resize(n, DVec3::ZERO);
-        let r = view.params.rotation_and_derivatives()[0];
-        let (s, t) = (view.params.scale, view.params.translation);
-        let rc_t = view.pose.rotation.transpose();
-        let eye = view.pose.position;
-        let f = view.focal();
-        let h = f64::from(self.height);
-        let cx = 0.5 * f64::from(self.width) + h * view.params.principal.x;
-        let cy = 0.5 * h + h * view.params.principal.y;
+        let proj = view.projector();
         let one = |p: &Vec3, sc: &mut DVec2, cm: &mut DVec3| {
-            let c = rc_t * (t + s * (r * p.as_dvec3()) - eye);
-            let z = -c.z;
-            *cm = c;
-            *sc = DVec2::new(cx + f * c.x / z, cy - f * c.y / z);
+            *cm = proj.to_camera(*p);
+            *sc = proj.to_pixel(*cm);
         };
         if self.parallel {
             positions
@@ -322,7 +318,7 @@ impl Renderer {
         }
         // Clipping against the near plane is deliberately not supported: a fitted object is in
         // front of its camera, and a vertex behind it means the camera is inside the object.
-        let near = 1e-9 * (1.0 + eye.length());
+        let near = 1e-9 * (1.0 + view.pose.position.length());
         if let Some(i) = self
             .cam
             .iter()
