@@ -212,3 +212,84 @@ fn bad_input_gives_clear_errors() {
         "gradient",
     );
 }
+
+/// tiny-skia's anti-aliasing (4×4 sub-samples) against a 16× super-sampled, box-averaged
+/// render: what the forward pass's coverage error is, stated as a bound.
+#[test]
+fn coverage_is_close_to_exact_area_coverage() {
+    let mesh = cup(10, 48);
+    let t = topo(&mesh);
+    let mut v = view(64);
+    v.params.pitch = 0.5;
+    let mut ren = Renderer::new(64, 64).unwrap();
+    let cov = ren.forward(&t, &mesh.positions, &v).unwrap().to_vec();
+    let ss = 16usize;
+    let mut big = Renderer::new(64 * ss as u32, 64 * ss as u32).unwrap();
+    let bv = View {
+        width: 64 * ss as u32,
+        height: 64 * ss as u32,
+        ..v
+    };
+    let b = big.forward(&t, &mesh.positions, &bv).unwrap();
+    let (mut worst, mut sum, mut signed, mut n) = (0.0f32, 0.0f32, 0.0f32, 0);
+    for (i, &c) in cov.iter().enumerate() {
+        let (x, y) = (i % 64, i / 64);
+        let mut r = 0.0;
+        for dy in 0..ss {
+            for dx in 0..ss {
+                r += b[(ss * y + dy) * 64 * ss + ss * x + dx];
+            }
+        }
+        r /= (ss * ss) as f32;
+        if r > 0.0 && r < 1.0 || c > 0.0 && c < 1.0 {
+            worst = worst.max((c - r).abs());
+            sum += (c - r).abs();
+            signed += c - r;
+            n += 1;
+        }
+    }
+    let mean = sum / n as f32;
+    println!(
+        "boundary pixels {n}: mean |error| {mean:.4}, worst {worst:.4}, signed sum {signed:.3}"
+    );
+    // Random-looking per pixel (16 sub-sample levels), unbiased overall: no dilation or erosion.
+    assert!(
+        mean < 0.03 && worst < 0.15 && signed.abs() < 0.01 * n as f32,
+        "mean {mean}, worst {worst}, signed {signed}"
+    );
+}
+
+#[test]
+fn multi_view_loss_is_bit_identical_with_rayon() {
+    let mesh = cup(8, 32);
+    let t = topo(&mesh);
+    let views: Vec<View> = (0..3)
+        .map(|i| View::turntable(48, 48, 2.0 * i as f64, 3.0, 0.6, DVec3::ZERO).unwrap())
+        .collect();
+    let masks: Vec<procfit::mask::Mask> = views
+        .iter()
+        .map(|v| {
+            let mut r = Renderer::new(48, 48).unwrap();
+            let moved: Vec<Vec3> = mesh.positions.iter().map(|&p| p * 1.1).collect();
+            procfit::mask::Mask::new(48, 48, r.forward(&t, &moved, v).unwrap().to_vec()).unwrap()
+        })
+        .collect();
+    let run = |parallel: bool| {
+        let mut l = procfit::render::MultiViewLoss::new(48, 48, 3).unwrap();
+        l.set_parallel(parallel);
+        let mut gp = vec![Vec3::ZERO; mesh.positions.len()];
+        let mut gv = vec![[0.0; N_VIEW_PARAMS]; 3];
+        let loss = l
+            .evaluate(&t, &mesh.positions, &views, &masks, &mut gp, &mut gv)
+            .unwrap();
+        (loss, gp, gv)
+    };
+    let (a, b) = (run(false), run(true));
+    assert!(a.0 > 0.0 && a.0.to_bits() == b.0.to_bits());
+    assert!(
+        a.1.iter()
+            .zip(&b.1)
+            .all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits))
+    );
+    assert_eq!(a.2, b.2);
+}
