@@ -29,7 +29,7 @@
 //!
 //! Also here: [`MultiViewLoss`] (eq. 1 over several views, rayon over views),
 //! [`LabelRenderer`] (front-most label per sub-sample, forward only), [`testmesh`] (known
-//! shapes) and [`bench`] (the benchmark workload, also for timing in wasm).
+//! shapes) and [`bench`](mod@bench) (the benchmark workload, also for timing in wasm).
 //!
 //! **The caller allocates**: a [`Renderer`] owns every scratch buffer for one image size and
 //! reuses it on every call, so the per-iteration loop of a fit does not allocate (after the first
