@@ -185,6 +185,12 @@ fn bad_input_gives_clear_errors() {
         ren.forward(&t, &mesh.positions, &view(8)).map(|_| ()),
         "8×8",
     );
+    // A vertex just in front of the camera plane projects absurdly far: an error, not a hang.
+    let back = Vec3::new(0.4f32.sin(), 0.0, 0.4f32.cos());
+    let right = Vec3::new(0.4f32.cos(), 0.0, -0.4f32.sin());
+    let mut near = mesh.positions.clone();
+    near[0] = back * 3.0 + right * 100.0 - back * 1e-6;
+    check(ren.forward(&t, &near, &v).map(|_| ()), "camera plane");
     let mut bad_fov = v;
     bad_fov.params.fov_y = 4.0;
     check(

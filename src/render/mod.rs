@@ -78,6 +78,9 @@ impl From<crate::camera::CameraError> for RenderError {
 /// 8191 px; beyond it silently fills aliased. Kept well below that.
 pub const MAX_SIDE: u32 = 8000;
 
+/// Largest projected coordinate (pixels) accepted.
+const MAX_COORD: f64 = 1e8;
+
 /// Distance (pixels) from a boundary point to where its outside winding number is sampled.
 const OUTSIDE_PROBE: f64 = 1e-4;
 
@@ -343,8 +346,16 @@ impl Renderer {
                 "vertex {i} is on or behind the camera plane (camera inside or touching the object)"
             )));
         }
-        if let Some(i) = self.screen.iter().position(|p| !p.is_finite()) {
-            return Err(RenderError(format!("vertex {i} projects to infinity")));
+        // Far beyond the image, f64 can no longer step an edge pixel by pixel (a vertex there
+        // sits almost on the camera plane).
+        if let Some(i) = self
+            .screen
+            .iter()
+            .position(|p| !(p.abs().max_element() <= MAX_COORD))
+        {
+            return Err(RenderError(format!(
+                "vertex {i} projects more than {MAX_COORD:e} pixels away (almost on the camera plane)"
+            )));
         }
         Ok(())
     }
