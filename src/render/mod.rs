@@ -351,7 +351,7 @@ impl Renderer {
         if let Some(i) = self
             .screen
             .iter()
-            .position(|p| !(p.abs().max_element() <= MAX_COORD))
+            .position(|p| !p.is_finite() || p.abs().max_element() > MAX_COORD)
         {
             return Err(RenderError(format!(
                 "vertex {i} projects more than {MAX_COORD:e} pixels away (almost on the camera plane)"
