@@ -24,12 +24,19 @@ enum Command {
         /// Only this generator.
         name: Option<String>,
     },
+    /// Recompute the tree generator's Algorithm 3 mutation statistics (src/tree/mutation_stats.json).
+    TreeStats {
+        /// Where to write the JSON (default: print to stdout).
+        #[arg(long)]
+        out: Option<std::path::PathBuf>,
+    },
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Generators { name } => list_generators(name.as_deref()),
+        Command::TreeStats { out } => tree_stats(out.as_deref()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -64,4 +71,18 @@ fn list_generators(only: Option<&str>) -> Result<(), String> {
         println!("  presets: {}", presets.join(", "));
     }
     Ok(())
+}
+
+fn tree_stats(out: Option<&std::path::Path>) -> Result<(), String> {
+    let stats = procfit::tree::mutation::tree_stats().map_err(|e| e.to_string())?;
+    let text = stats.to_json() + "\n";
+    match out {
+        Some(path) => {
+            std::fs::write(path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))
+        }
+        None => {
+            print!("{text}");
+            Ok(())
+        }
+    }
 }

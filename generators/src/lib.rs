@@ -16,6 +16,8 @@
 use glam::{Vec2, Vec3};
 use std::fmt;
 
+pub mod tree;
+
 /// Level of detail, from the coarse mesh used during the fit to the export mesh.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Lod {
@@ -294,7 +296,7 @@ pub trait Generator: Send + Sync {
 
 /// Every generator procfit knows, in the order the page lists them.
 pub fn all() -> Vec<&'static dyn Generator> {
-    vec![]
+    vec![&tree::TreeGenerator]
 }
 
 /// The generator with this machine name.
