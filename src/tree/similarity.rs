@@ -9,11 +9,12 @@
 //! - `B`, `L`: the shares of branch and leaf pixels in the stripe's `[a, d)` box; the stripe is
 //!   trunk when `B / L` exceeds [`SimilarityConfig::trunk_ratio`], crown otherwise.
 //!
-//! Stripe `i` of one mask is compared with stripe `i` of the other (numbers the paper leaves
-//! out follow the authors' code, see the notes): the overlap (intersection over union) of the
-//! crown borders and of the dense borders, the latter weighted 3×, scaled by the vertical
-//! overlap of the two stripes and by `max(0.01, 1 − 3 |Δ branch share|)`; trunk stripes are
-//! scored on their borders alone. `TSim` is the mean over stripes; the result is
+//! Stripes are compared stripe by stripe (numbers the paper leaves out follow the authors' code,
+//! see the notes): the overlap (intersection over union) of the crown borders and of the dense
+//! borders, the latter weighted 3×, scaled by `max(0.01, 1 − 3 |Δ branch share|)`; trunk
+//! stripes are scored on their borders alone. Each pair of stripes at the same height counts
+//! by the rows they share, so `TSim` is the row-weighted mean score over the rows either tree
+//! spans (identical masks pair each stripe with itself and score 1). The result is
 //! `TSim · Π_c min(c, c_ref) / max(c, c_ref)` over height, width, branch density, leaf density
 //! and, when both sides give them, leaf size and branch-graph vertex count ([`TreeTraits`]).
 //!
@@ -226,11 +227,10 @@ pub fn ratio_factor(c: f64, c_ref: f64) -> f64 {
     if hi <= 0.0 { 1.0 } else { (lo / hi).max(0.0) }
 }
 
-/// The score of stripe `i` in two profiles, in `[0, 1]`.
+/// The score of two stripes, in `[0, 1]`, before weighting by their vertical overlap.
 fn stripe_score(s: &Stripe, r: &Stripe, cfg: &SimilarityConfig) -> f64 {
-    let vertical = interval_iou(s.rows, r.rows);
     let (sc, rc) = match (s.crown, r.crown) {
-        (None, None) => return vertical,
+        (None, None) => return 1.0,
         (Some(sc), Some(rc)) => (sc, rc),
         _ => return 0.0,
     };
@@ -238,19 +238,51 @@ fn stripe_score(s: &Stripe, r: &Stripe, cfg: &SimilarityConfig) -> f64 {
     let share = (1.0 - 3.0 * (s.branch_share() - r.branch_share()).abs()).max(0.01);
     match (s.is_trunk(cfg.trunk_ratio), r.is_trunk(cfg.trunk_ratio)) {
         // Trunk stripes: where the trunk is and how wide.
-        (true, true) => vertical * borders,
+        (true, true) => borders,
         (false, false) => {
             let dense = match (s.dense, r.dense) {
                 (None, None) => 1.0,
                 (Some(a), Some(b)) => interval_iou(a, b),
                 _ => 0.0,
             };
-            vertical * share * (borders + cfg.dense_weight * dense) / (1.0 + cfg.dense_weight)
+            share * (borders + cfg.dense_weight * dense) / (1.0 + cfg.dense_weight)
         }
         // Trunk against crown: half credit for the borders, so the GA can still move towards
         // the right outline.
-        _ => 0.5 * vertical * share * borders,
+        _ => 0.5 * share * borders,
     }
+}
+
+/// TSim: stripe scores weighted by how many rows the two stripes share, over the rows either
+/// tree spans. Stripe `i` of one tree meets the stripes of the other at the same height, so a
+/// tree shifted or stretched vertically by less than a stripe loses a little, not everything;
+/// rows only one tree covers score 0.
+fn tsim(a: &TreeProfile, b: &TreeProfile, cfg: &SimilarityConfig) -> f64 {
+    let span = |p: &TreeProfile| {
+        let first = p.stripes.first().map_or(0.0, |s| s.rows.0);
+        let last = p.stripes.last().map_or(0.0, |s| s.rows.1);
+        (first, last)
+    };
+    let (sa, sb) = (span(a), span(b));
+    let total = sa.1.max(sb.1) - sa.0.min(sb.0);
+    if total <= 0.0 {
+        return 0.0;
+    }
+    let mut sum = 0.0;
+    let mut j0 = 0;
+    for s in &a.stripes {
+        // Stripes are sorted top to bottom: skip those of `b` entirely above `s`.
+        while j0 < b.stripes.len() && b.stripes[j0].rows.1 <= s.rows.0 {
+            j0 += 1;
+        }
+        for r in b.stripes[j0..].iter().take_while(|r| r.rows.0 < s.rows.1) {
+            let overlap = s.rows.1.min(r.rows.1) - s.rows.0.max(r.rows.0);
+            if overlap > 0.0 {
+                sum += overlap * stripe_score(s, r, cfg);
+            }
+        }
+    }
+    sum / total
 }
 
 /// The parts of one similarity value, for reports and tests.
@@ -272,14 +304,7 @@ pub fn compare(
     b_traits: &TreeTraits,
     cfg: &SimilarityConfig,
 ) -> SimilarityBreakdown {
-    let n = a.stripes.len().min(b.stripes.len()).max(1);
-    let tsim = a
-        .stripes
-        .iter()
-        .zip(&b.stripes)
-        .map(|(s, r)| stripe_score(s, r, cfg))
-        .sum::<f64>()
-        / n as f64;
+    let tsim = tsim(a, b, cfg);
     let mut factors = vec![
         ("height", ratio_factor(a.height, b.height)),
         ("width", ratio_factor(a.width, b.width)),
