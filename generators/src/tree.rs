@@ -283,6 +283,9 @@ pub const PART_TRUNK: u8 = 0;
 pub const PART_BRANCH: u8 = 1;
 /// Part id of the leaves.
 pub const PART_LEAF: u8 = 2;
+/// Triangles per leaf card: the front pair, then the back pair. A silhouette needs only the
+/// front pair (`i % LEAF_CARD_TRIANGLES < 2` over the leaf triangles, which come last).
+pub const LEAF_CARD_TRIANGLES: usize = 4;
 
 /// Hard caps so that no parameter vector can make an absurd mesh (the GA samples the corners
 /// of the space): beyond them further stems or leaves are skipped.
