@@ -84,6 +84,9 @@ fn check(preset: &str, lod: Lod) {
         "{what}: top {} for height {height}",
         hi.y
     );
+    // The LOD caps on stems and leaves never cut a preset: same branch graph at every level.
+    let stems = |l| tg::skeleton(&p.values, l).expect("skeleton").stems.len();
+    assert_eq!(stems(lod), stems(Lod::Ultra), "{what}: stems capped");
     // Deterministic.
     assert_eq!(
         g.generate(&p.values, lod).expect("generates"),

@@ -287,10 +287,9 @@ pub const PART_LEAF: u8 = 2;
 /// front pair (`i % LEAF_CARD_TRIANGLES < 2` over the leaf triangles, which come last).
 pub const LEAF_CARD_TRIANGLES: usize = 4;
 
-/// Hard caps so that no parameter vector can make an absurd mesh (the GA samples the corners
-/// of the space): beyond them further stems or leaves are skipped.
-const MAX_STEMS: usize = 6000;
-const MAX_LEAVES: usize = 40_000;
+/// Polyline segments of the skeleton's trunk pieces and branches, whatever the LOD.
+const SKELETON_TRUNK_SEGMENTS: usize = 20;
+const SKELETON_BRANCH_SEGMENTS: usize = 8;
 
 /// Tessellation per level of detail.
 #[derive(Clone, Copy)]
@@ -298,11 +297,16 @@ struct Detail {
     /// Tube sides of the trunk and of branches.
     trunk_sides: usize,
     branch_sides: usize,
-    /// Polyline segments of the trunk and of branches.
+    /// Polyline segments of the trunk and of branch tubes (subsampling the skeleton's).
     trunk_segments: usize,
     branch_segments: usize,
     /// Leaves are merged `leaf_merge` to one card (area kept) to keep coarse levels cheap.
     leaf_merge: usize,
+    /// Hard caps so that no parameter vector makes an absurd mesh (the GA samples the corners
+    /// of the space and evaluates at LOW): beyond them further stems or leaf cards are
+    /// skipped. Every preset stays below the LOW caps, so presets look alike at every level.
+    max_stems: usize,
+    max_leaves: usize,
 }
 
 fn detail(lod: Lod) -> Detail {
@@ -313,6 +317,8 @@ fn detail(lod: Lod) -> Detail {
             trunk_segments: 4,
             branch_segments: 2,
             leaf_merge: 4,
+            max_stems: 1500,
+            max_leaves: 6000,
         },
         Lod::Medium => Detail {
             trunk_sides: 8,
@@ -320,6 +326,8 @@ fn detail(lod: Lod) -> Detail {
             trunk_segments: 8,
             branch_segments: 3,
             leaf_merge: 2,
+            max_stems: 3000,
+            max_leaves: 15000,
         },
         Lod::High => Detail {
             trunk_sides: 12,
@@ -327,6 +335,8 @@ fn detail(lod: Lod) -> Detail {
             trunk_segments: 12,
             branch_segments: 5,
             leaf_merge: 1,
+            max_stems: 6000,
+            max_leaves: 40000,
         },
         Lod::Ultra => Detail {
             trunk_sides: 20,
@@ -334,6 +344,8 @@ fn detail(lod: Lod) -> Detail {
             trunk_segments: 20,
             branch_segments: 8,
             leaf_merge: 1,
+            max_stems: 6000,
+            max_leaves: 40000,
         },
     }
 }
@@ -575,13 +587,15 @@ impl Builder<'_> {
         radius: f32,
         curve: f32,
     ) -> Option<usize> {
-        if self.sk.stems.len() >= MAX_STEMS || length <= 1e-4 || radius <= 0.0 {
+        if self.sk.stems.len() >= self.d.max_stems || length <= 1e-4 || radius <= 0.0 {
             return None;
         }
+        // The skeleton is built at one resolution for every LOD, so the branch layout (which
+        // depends on tips, pruning and lengths) is the same at every level; meshes subsample.
         let segments = if level == 0 {
-            self.d.trunk_segments
+            SKELETON_TRUNK_SEGMENTS
         } else {
-            self.d.branch_segments
+            SKELETON_BRANCH_SEGMENTS
         };
         let mut pts = Vec::with_capacity(segments + 1);
         self.polyline(level, base, dir, axis, length, curve, segments, &mut pts);
@@ -743,21 +757,24 @@ impl Builder<'_> {
         }
     }
 
-    /// Leaf cards along a last-level stem (or along the trunk of a leafy bare trunk).
+    /// Leaf cards along a last-level stem.
     fn leaves(&mut self, stem: usize) {
         let p = self.p;
         let merge = self.d.leaf_merge;
         let n = p.leaves.div_ceil(merge);
+        // Leaves draw from their own stream, seeded by one draw of the tree's: the number of
+        // cards depends on the LOD, and it must not shift the random choices of the branches.
+        let mut rng = Rng(self.rng.next_u64());
         for k in 0..n {
-            if self.sk.leaves.len() >= MAX_LEAVES {
+            if self.sk.leaves.len() >= self.d.max_leaves {
                 return;
             }
-            let t = 0.15 + 0.85 * (k as f32 + self.rng.unit()) / n as f32;
+            let t = 0.15 + 0.85 * (k as f32 + rng.unit()) / n as f32;
             let (pos, dir, _) = sample_stem(&self.sk.stems[stem], t);
             let side = any_perp(dir);
-            let around = Quat::from_axis_angle(dir, self.rng.unit() * TAU) * side;
-            let ldir = (Quat::from_axis_angle(around, 0.6 + 0.4 * self.rng.sym()) * dir)
-                .normalize_or(Vec3::Y);
+            let around = Quat::from_axis_angle(dir, rng.unit() * TAU) * side;
+            let ldir =
+                (Quat::from_axis_angle(around, 0.6 + 0.4 * rng.sym()) * dir).normalize_or(Vec3::Y);
             let normal = ldir.cross(around).normalize_or(Vec3::Z);
             self.sk.leaves.push((pos, ldir, normal));
         }
@@ -811,21 +828,27 @@ pub fn skeleton(params: &[f64], lod: Lod) -> Result<Skeleton, GenError> {
 }
 
 /// Appends a closed tube along a stem: rings around each polyline point, fan caps at both ends.
-fn tube(mesh: &mut Mesh, stem: &Stem, sides: usize, part: u8) {
-    let n = stem.points.len();
+fn tube(mesh: &mut Mesh, stem: &Stem, sides: usize, segments: usize, part: u8) {
+    // Subsample the skeleton's polyline to `segments` segments, ends kept.
+    let total = stem.points.len() - 1;
+    let m = segments.clamp(1, total);
+    let pick = |i: usize| (i * total + m / 2) / m;
+    let points: Vec<Vec3> = (0..=m).map(|i| stem.points[pick(i)]).collect();
+    let radii: Vec<f32> = (0..=m).map(|i| stem.radii[pick(i)]).collect();
+    let n = points.len();
     let base = mesh.positions.len() as u32;
-    let mut normal = any_perp((stem.points[1] - stem.points[0]).normalize_or(Vec3::Y));
+    let mut normal = any_perp((points[1] - points[0]).normalize_or(Vec3::Y));
     let mut prev_dir = Vec3::ZERO;
     let mut ring_normals: Vec<Vec3> = Vec::with_capacity(n * sides);
     for i in 0..n {
         // Ring direction: the mean of the adjacent segments, so rings bisect the bends.
         let d_in = if i > 0 {
-            stem.points[i] - stem.points[i - 1]
+            points[i] - points[i - 1]
         } else {
             Vec3::ZERO
         };
         let d_out = if i + 1 < n {
-            stem.points[i + 1] - stem.points[i]
+            points[i + 1] - points[i]
         } else {
             Vec3::ZERO
         };
@@ -839,7 +862,7 @@ fn tube(mesh: &mut Mesh, stem: &Stem, sides: usize, part: u8) {
         for k in 0..sides {
             let a = TAU * k as f32 / sides as f32;
             let radial = normal * a.cos() + binormal * a.sin();
-            mesh.positions.push(stem.points[i] + radial * stem.radii[i]);
+            mesh.positions.push(points[i] + radial * radii[i]);
             ring_normals.push(radial);
         }
     }
@@ -870,10 +893,10 @@ fn tube(mesh: &mut Mesh, stem: &Stem, sides: usize, part: u8) {
     }
     // Caps: a centre vertex at each end, fans wound to face out of the tube.
     let start = mesh.positions.len() as u32;
-    mesh.positions.push(stem.points[0]);
-    mesh.positions.push(stem.points[n - 1]);
-    let d0 = -(stem.points[1] - stem.points[0]).normalize_or(Vec3::Y);
-    let d1 = (stem.points[n - 1] - stem.points[n - 2]).normalize_or(Vec3::Y);
+    mesh.positions.push(points[0]);
+    mesh.positions.push(points[n - 1]);
+    let d0 = -(points[1] - points[0]).normalize_or(Vec3::Y);
+    let d1 = (points[n - 1] - points[n - 2]).normalize_or(Vec3::Y);
     for k in 0..sides {
         mesh.triangles.push([start, v(0, k + 1), v(0, k)]);
         mesh.triangles
@@ -927,16 +950,16 @@ pub fn mesh_skeleton(sk: &Skeleton, lod: Lod) -> Mesh {
     let tube_verts: usize = sk
         .stems
         .iter()
-        .map(|s| s.points.len() * d.trunk_sides.max(d.branch_sides) + 2)
+        .map(|_| (d.trunk_segments + 1) * d.trunk_sides.max(d.branch_sides) + 2)
         .sum();
     mesh.positions.reserve(tube_verts + 4 * sk.leaves.len());
     for s in &sk.stems {
-        let (sides, part) = if s.level == 0 {
-            (d.trunk_sides, PART_TRUNK)
+        let (sides, segments, part) = if s.level == 0 {
+            (d.trunk_sides, d.trunk_segments, PART_TRUNK)
         } else {
-            (d.branch_sides, PART_BRANCH)
+            (d.branch_sides, d.branch_segments, PART_BRANCH)
         };
-        tube(&mut mesh, s, sides, part);
+        tube(&mut mesh, s, sides, segments, part);
     }
     for &(p, dir, n) in &sk.leaves {
         leaf_card(&mut mesh, p, dir, n, sk.leaf_dims);
