@@ -6,7 +6,9 @@ use procfit::generators::tree::{TreeGenerator, idx};
 use procfit::generators::{Generator, Lod};
 use procfit::mask::LabelImage;
 use procfit::tree::ga::GaConfig;
-use procfit::tree::impostor::{TreeFitConfig, TreeImpostor, fit_tree, silhouette_iou64, tree_view};
+use procfit::tree::impostor::{
+    TreeFitConfig, TreeImpostor, fit_tree, frame_reference, silhouette_iou64, tree_view,
+};
 use procfit::tree::similarity::{SimilarityConfig, TreeReference, TreeTraits};
 use procfit::tree::{BRANCH, LEAF, genome_to_params};
 
@@ -162,4 +164,35 @@ fn render_64() -> LabelImage {
             .expect("tree"),
     )
     .expect("renders")
+}
+
+#[test]
+fn framing_puts_the_tree_where_the_camera_expects_it() {
+    // A small tree in a corner of a wide image: a 3 px trunk and a leaf blob above it.
+    let (w, h) = (200usize, 100usize);
+    let mut px = vec![0u8; w * h];
+    for y in 60..80 {
+        for x in 29..32 {
+            px[y * w + x] = BRANCH;
+        }
+    }
+    for y in 40..60 {
+        for x in 20..41 {
+            px[y * w + x] = LEAF;
+        }
+    }
+    let img = LabelImage::new(w as u32, h as u32, px).expect("labels");
+    let f = frame_reference(&img, 100).expect("framed");
+    let rows: Vec<usize> = (0..100)
+        .filter(|&y| f.labels()[y * 100..(y + 1) * 100].iter().any(|&l| l != 0))
+        .collect();
+    assert_eq!((rows[0], rows[rows.len() - 1]), (10, 89), "tree rows");
+    let foot: Vec<usize> = (0..100)
+        .filter(|&x| f.labels()[89 * 100 + x] == BRANCH)
+        .collect();
+    let mid = (foot[0] + foot[foot.len() - 1] + 1) as f64 / 2.0;
+    assert!((mid - 50.0).abs() <= 1.0, "foot centred at {mid}");
+    let empty = LabelImage::new(4, 4, vec![0; 16]).expect("labels");
+    assert!(frame_reference(&empty, 64).is_err());
+    assert!(frame_reference(&img, 1).is_err());
 }

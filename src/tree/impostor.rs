@@ -277,3 +277,47 @@ pub fn silhouette_iou64(a: &Mesh, b: &Mesh, size: u32, tree_height: f64) -> Resu
     }
     Ok(sum / 64.0)
 }
+
+/// Resamples a reference label image to `size × size` so that its tree sits where
+/// [`tree_view`]`(size, size, 12.0)` puts a generated tree 12 units tall: the lowest tree pixels'
+/// centre column at the image centre, the tree's top at 10 % and its foot at 90 % of the image
+/// height (nearest neighbour, aspect kept). A photo has no scale, so this fixes it; the fit
+/// then finds the tree's proportions, not its size in metres. Errors on an image without tree
+/// pixels or a size outside 8..=4096.
+pub fn frame_reference(labels: &LabelImage, size: u32) -> Result<LabelImage, TreeError> {
+    if !(8..=4096).contains(&size) {
+        return Err(TreeError(format!("frame size {size} is not in 8..=4096")));
+    }
+    let (w, h) = (labels.width() as usize, labels.height() as usize);
+    let px = labels.labels();
+    let is_tree = |l: u8| l == BRANCH || l == LEAF;
+    let rows: Vec<usize> = (0..h)
+        .filter(|&y| px[y * w..(y + 1) * w].iter().any(|&l| is_tree(l)))
+        .collect();
+    let (Some(&top), Some(&bottom)) = (rows.first(), rows.last()) else {
+        return Err(TreeError(
+            "the reference has no tree in it: no branch or leaf pixel".into(),
+        ));
+    };
+    // Foot: the middle of the tree pixels on the lowest tree row.
+    let foot_cols: Vec<usize> = (0..w).filter(|&x| is_tree(px[bottom * w + x])).collect();
+    let foot_x = (foot_cols[0] + foot_cols[foot_cols.len() - 1] + 1) as f64 / 2.0;
+    let n = f64::from(size);
+    let scale = 0.8 * n / (bottom + 1 - top) as f64;
+    let (dst_foot_x, dst_foot_y) = (0.5 * n, 0.9 * n);
+    let mut out = vec![BACKGROUND; (size * size) as usize];
+    for y in 0..size as usize {
+        let sy = (bottom + 1) as f64 + (y as f64 + 0.5 - dst_foot_y) / scale;
+        if sy < 0.0 || sy >= h as f64 {
+            continue;
+        }
+        for x in 0..size as usize {
+            let sx = foot_x + (x as f64 + 0.5 - dst_foot_x) / scale;
+            if sx < 0.0 || sx >= w as f64 {
+                continue;
+            }
+            out[y * size as usize + x] = px[sy as usize * w + sx as usize];
+        }
+    }
+    Ok(LabelImage::new(size, size, out)?)
+}
