@@ -941,7 +941,7 @@ fn leaf_card(mesh: &mut Mesh, pos: Vec3, dir: Vec3, normal: Vec3, dims: Vec2) {
 }
 
 /// Meshes a skeleton: tubes for the stems, cards for the leaves.
-pub fn mesh_skeleton(sk: &Skeleton, lod: Lod) -> Mesh {
+fn mesh_skeleton(sk: &Skeleton, lod: Lod) -> Mesh {
     let d = detail(lod);
     let mut mesh = Mesh {
         parts: PARTS.to_vec(),
