@@ -25,6 +25,7 @@ pub mod ad;
 pub mod build;
 pub mod building;
 pub mod dish;
+pub mod tree;
 
 /// Level of detail, from the coarse mesh used during the fit to the export mesh.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -310,7 +311,7 @@ pub trait Generator: Send + Sync {
 
 /// Every generator procfit knows, in the order the page lists them.
 pub fn all() -> Vec<&'static dyn Generator> {
-    vec![&dish::Dish, &building::Building]
+    vec![&dish::Dish, &building::Building, &tree::TreeGenerator]
 }
 
 /// The generator with this machine name.

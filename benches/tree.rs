@@ -1,0 +1,161 @@
+//! Tree benchmark (not a test): generator time per preset and LOD, impostor render time, GA
+//! evaluations per second on 1 and 2 threads, and tree reconstructions at the default budget
+//! (Gaussian against Algorithm 3 mutation) with their similarity, IoU-64 and wall time.
+//!
+//! `cargo bench --bench tree` prints markdown tables; `-- --quick` cuts the reconstruction
+//! budget by 4 for a fast look.
+
+use procfit::generators::tree::{TreeGenerator, idx};
+use procfit::generators::{Generator, Lod};
+use procfit::tree::ga::GaConfig;
+use procfit::tree::impostor::{TreeFitConfig, TreeImpostor, fit_tree, silhouette_iou64, tree_view};
+use procfit::tree::mutation::MutationStats;
+use procfit::tree::similarity::TreeTraits;
+use std::time::Instant;
+
+fn median_ms(runs: usize, mut f: impl FnMut()) -> f64 {
+    let mut t: Vec<f64> = (0..runs)
+        .map(|_| {
+            let s = Instant::now();
+            f();
+            s.elapsed().as_secs_f64() * 1e3
+        })
+        .collect();
+    t.sort_by(f64::total_cmp);
+    t[runs / 2]
+}
+
+/// Three trees that are not presets: presets with a new seed and changed proportions.
+fn targets() -> Vec<(&'static str, Vec<f64>)> {
+    let g = TreeGenerator;
+    let p = |n: &str| {
+        g.preset(n)
+            .map(|p| p.values)
+            .unwrap_or_else(|| g.defaults())
+    };
+    let mut a = p("oak");
+    a[idx::SEED] = 77.0;
+    a[idx::HEIGHT] = 10.0;
+    a[idx::SHAPE] = 1.0;
+    a[idx::SPLITS] = 1.0;
+    let mut b = p("birch");
+    b[idx::SEED] = 12.0;
+    b[idx::HEIGHT] = 13.0;
+    b[idx::LEVEL0 + 1] = 0.4;
+    b[idx::TROPISM] = 0.0;
+    let mut c = p("willow");
+    c[idx::SEED] = 301.0;
+    c[idx::HEIGHT] = 11.0;
+    c[idx::TROPISM] = -0.6;
+    c[idx::BASE_SIZE] = 0.35;
+    vec![("oak-like", a), ("birch-like", b), ("willow-like", c)]
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let quick = std::env::args().any(|a| a == "--quick");
+    let g = TreeGenerator;
+
+    println!("## Generator: milliseconds per tree (median)\n");
+    println!("| preset | LOW | MEDIUM | HIGH | ULTRA | triangles LOW / ULTRA |");
+    println!("|---|---|---|---|---|---|");
+    for p in g.presets() {
+        let mut row = format!("| {} |", p.name);
+        for lod in Lod::ALL {
+            let runs = if lod == Lod::Low { 21 } else { 5 };
+            let ms = median_ms(runs, || {
+                let _ = g.generate(&p.values, lod);
+            });
+            row += &format!(" {ms:.2} |");
+        }
+        let lo = g.generate(&p.values, Lod::Low)?.triangles.len();
+        let hi = g.generate(&p.values, Lod::Ultra)?.triangles.len();
+        println!("{row} {lo} / {hi} |");
+    }
+
+    let size = 128;
+    let view = tree_view(size, size, 12.0)?;
+    println!("\n## Impostor (two coverage renders, {size}²): milliseconds per tree (median)\n");
+    println!("| preset | generate + render |");
+    println!("|---|---|");
+    let mut imp = TreeImpostor::new(view)?;
+    for p in g.presets() {
+        let ms = median_ms(11, || {
+            if let Ok(m) = g.generate(&p.values, Lod::Low) {
+                let _ = imp.render(&m);
+            }
+        });
+        println!("| {} | {ms:.2} |", p.name);
+    }
+
+    let stats = MutationStats::tree()?;
+    let (name0, truth0) = &targets()[0];
+    let reference0 = imp.render(&g.generate(truth0, Lod::Low)?)?;
+    println!("\n## GA throughput on `{name0}` ({size}², LOW)\n");
+    println!("| threads | evaluations | seconds | evaluations / s |");
+    println!("|---|---|---|---|");
+    let small = TreeFitConfig {
+        ga: GaConfig {
+            population: 16,
+            generations: 6,
+            levels: 2,
+            ..GaConfig::default()
+        },
+        ..TreeFitConfig::default()
+    };
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()?;
+        let t = Instant::now();
+        let fit =
+            pool.install(|| fit_tree(&reference0, TreeTraits::default(), view, &small, None))?;
+        let s = t.elapsed().as_secs_f64();
+        println!(
+            "| {threads} | {} | {s:.2} | {:.0} |",
+            fit.ga.evaluations,
+            fit.ga.evaluations as f64 / s
+        );
+    }
+
+    let mut cfg = TreeFitConfig::default();
+    if quick {
+        cfg.ga.generations /= 4;
+    }
+    println!(
+        "\n## Reconstruction ({} evaluations, {size}², 2 threads, IoU-64 at 128² on MEDIUM)\n",
+        cfg.ga.evaluations()
+    );
+    println!("| tree | mutation | similarity | IoU-64 | seconds |");
+    println!("|---|---|---|---|---|");
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
+    let mut sums = [(0.0, 0.0); 2];
+    for (name, truth) in targets() {
+        let reference = imp.render(&g.generate(&truth, Lod::Low)?)?;
+        let truth_mesh = g.generate(&truth, Lod::Medium)?;
+        for (k, mutation) in [None, Some(&stats)].into_iter().enumerate() {
+            let t = Instant::now();
+            let fit =
+                pool.install(|| fit_tree(&reference, TreeTraits::default(), view, &cfg, mutation))?;
+            let s = t.elapsed().as_secs_f64();
+            let fit_mesh = g.generate(&fit.params, Lod::Medium)?;
+            let frame = 1.2 * truth[idx::HEIGHT].max(fit.params[idx::HEIGHT]);
+            let iou = silhouette_iou64(&truth_mesh, &fit_mesh, 128, frame)?;
+            let label = if k == 0 { "gaussian" } else { "algorithm 3" };
+            println!(
+                "| {name} | {label} | {:.3} | {iou:.3} | {s:.1} |",
+                fit.similarity
+            );
+            sums[k].0 += fit.similarity / 3.0;
+            sums[k].1 += iou / 3.0;
+        }
+    }
+    println!(
+        "| **mean** | gaussian | {:.3} | {:.3} | |",
+        sums[0].0, sums[0].1
+    );
+    println!(
+        "| **mean** | algorithm 3 | {:.3} | {:.3} | |",
+        sums[1].0, sums[1].1
+    );
+    Ok(())
+}

@@ -1,0 +1,165 @@
+//! Semantic tree masks (paper §3.5.1): a [`LabelImage`] with background, branch and leaf labels,
+//! made from a photo by colour (green → leaf, brown or grey → branch, the rest → background) or
+//! taken from a user-supplied label image.
+
+use super::{BACKGROUND, BRANCH, LEAF};
+use crate::mask::{LabelImage, MaskError};
+
+/// Colour rules for [`labels_from_rgb`], in HSV with hue in degrees and saturation/value in
+/// `[0, 1]`. The defaults suit daylight photos of trees against sky, grass-free ground or walls.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ColorThresholds {
+    /// Hue range of foliage (yellow-green to blue-green).
+    pub leaf_hue: (f32, f32),
+    /// Least saturation of foliage: greyish greens are not leaves.
+    pub leaf_min_saturation: f32,
+    /// Least value (brightness) of foliage: shadowed greens still count down to here.
+    pub leaf_min_value: f32,
+    /// Hue range of bark (red to orange-brown).
+    pub bark_hue: (f32, f32),
+    /// Saturation range of brown bark.
+    pub bark_saturation: (f32, f32),
+    /// Value range of bark, brown or grey: very dark shadows and bright sky are excluded.
+    pub bark_value: (f32, f32),
+    /// Greys (saturation at most this) in the bark value range count as bark (birch, beech).
+    pub grey_max_saturation: f32,
+}
+
+impl Default for ColorThresholds {
+    fn default() -> Self {
+        ColorThresholds {
+            leaf_hue: (60.0, 170.0),
+            leaf_min_saturation: 0.18,
+            leaf_min_value: 0.08,
+            bark_hue: (0.0, 50.0),
+            bark_saturation: (0.12, 0.8),
+            bark_value: (0.08, 0.6),
+            grey_max_saturation: 0.12,
+        }
+    }
+}
+
+/// Hue (degrees), saturation and value of an 8-bit RGB colour.
+pub fn rgb_to_hsv(r: u8, g: u8, b: u8) -> (f32, f32, f32) {
+    let (r, g, b) = (
+        f32::from(r) / 255.0,
+        f32::from(g) / 255.0,
+        f32::from(b) / 255.0,
+    );
+    let max = r.max(g).max(b);
+    let min = r.min(g).min(b);
+    let delta = max - min;
+    let hue = if delta <= 0.0 {
+        0.0
+    } else if max == r {
+        60.0 * ((g - b) / delta).rem_euclid(6.0)
+    } else if max == g {
+        60.0 * ((b - r) / delta + 2.0)
+    } else {
+        60.0 * ((r - g) / delta + 4.0)
+    };
+    let sat = if max > 0.0 { delta / max } else { 0.0 };
+    (hue, sat, max)
+}
+
+/// The label of one colour under `t`.
+pub fn classify(r: u8, g: u8, b: u8, t: &ColorThresholds) -> u8 {
+    let (h, s, v) = rgb_to_hsv(r, g, b);
+    let in_range = |x: f32, (lo, hi): (f32, f32)| (lo..=hi).contains(&x);
+    if in_range(h, t.leaf_hue) && s >= t.leaf_min_saturation && v >= t.leaf_min_value {
+        LEAF
+    } else if in_range(v, t.bark_value)
+        && (s <= t.grey_max_saturation
+            || (in_range(h, t.bark_hue) && in_range(s, t.bark_saturation)))
+    {
+        BRANCH
+    } else {
+        BACKGROUND
+    }
+}
+
+/// Labels a photo by colour. `pixels` is row-major, `channels` values a pixel (3 = RGB,
+/// 4 = RGBA; alpha below 128 is background).
+pub fn labels_from_rgb(
+    width: u32,
+    height: u32,
+    pixels: &[u8],
+    channels: usize,
+    thresholds: &ColorThresholds,
+) -> Result<LabelImage, MaskError> {
+    if channels != 3 && channels != 4 {
+        return Err(MaskError(format!(
+            "{channels} channels a pixel; expected 3 (RGB) or 4 (RGBA)"
+        )));
+    }
+    let n = width as usize * height as usize;
+    if pixels.len() != n * channels {
+        return Err(MaskError(format!(
+            "{} bytes for a {width}×{height} image with {channels} channels",
+            pixels.len()
+        )));
+    }
+    let labels = pixels
+        .chunks_exact(channels)
+        .map(|p| {
+            if channels == 4 && p[3] < 128 {
+                BACKGROUND
+            } else {
+                classify(p[0], p[1], p[2], thresholds)
+            }
+        })
+        .collect();
+    LabelImage::new(width, height, labels)
+}
+
+/// A user-supplied label image: every value must be [`BACKGROUND`], [`BRANCH`], [`LEAF`] or
+/// [`LabelImage::DONT_CARE`].
+pub fn labels_from_values(
+    width: u32,
+    height: u32,
+    values: Vec<u8>,
+) -> Result<LabelImage, MaskError> {
+    if let Some((i, v)) = values
+        .iter()
+        .enumerate()
+        .find(|&(_, &v)| !matches!(v, BACKGROUND | BRANCH | LEAF | LabelImage::DONT_CARE))
+    {
+        return Err(MaskError(format!(
+            "label {v} at pixel {i}: tree labels are 0 background, 1 branch, 2 leaf, 255 don't care"
+        )));
+    }
+    LabelImage::new(width, height, values)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn check(rgb: [u8; 3], expected: u8) {
+        let got = classify(rgb[0], rgb[1], rgb[2], &ColorThresholds::default());
+        assert_eq!(got, expected, "colour {rgb:?}");
+    }
+
+    #[test]
+    fn colours_map_to_labels() {
+        check([40, 120, 30], LEAF); // leaf green
+        check([20, 60, 25], LEAF); // shadowed foliage
+        check([150, 170, 60], LEAF); // yellow-green
+        check([90, 60, 35], BRANCH); // brown bark
+        check([110, 110, 105], BRANCH); // grey bark
+        check([135, 190, 235], BACKGROUND); // sky
+        check([250, 250, 250], BACKGROUND); // white wall
+        check([5, 5, 5], BACKGROUND); // black
+        check([200, 40, 40], BACKGROUND); // red car
+    }
+
+    #[test]
+    fn bad_inputs_are_refused() {
+        let t = ColorThresholds::default();
+        assert!(labels_from_rgb(2, 2, &[0; 11], 3, &t).is_err());
+        assert!(labels_from_rgb(2, 2, &[0; 8], 2, &t).is_err());
+        assert!(labels_from_values(2, 1, vec![0, 3]).is_err());
+        let l = labels_from_rgb(2, 1, &[40, 120, 30, 255, 40, 120, 30, 0], 4, &t).unwrap();
+        assert_eq!(l.labels(), &[LEAF, BACKGROUND]);
+    }
+}
