@@ -12,18 +12,22 @@
 //! not explain gets no hard background constraint and lends only its explained pixels to the
 //! border model.
 
+use super::decode::area_resample;
 use super::gmm::{Gmm, Rgb};
 use super::maxflow::Graph;
 use super::morph;
 use super::{BBox, Label, Photo, SegmentError, Segmentation, Stroke};
 use crate::mask::Mask;
 
+/// Photos with at least this many pixels are first segmented at half size (coarse to fine);
+/// the half-size image then has at least 160×120 pixels.
+const COARSE_MIN_PIXELS: usize = 4 * 160 * 120;
 /// Smoothness weight γ of GrabCut's energy (eq. 11; the paper's value).
 const GAMMA: f32 = 50.0;
 /// Capacity of a hard constraint: larger than any cut through a pixel's eight n-links.
 pub(super) const HARD: f32 = 1.0e6;
 /// Largest number of samples used to fit one colour model (the rest adds time, not accuracy).
-const MAX_SAMPLES: usize = 24_000;
+const MAX_SAMPLES: usize = 12_000;
 /// Fraction of a border side's pixels that the other sides must fail to explain for the side to
 /// count as touched by the object.
 const TOUCH_FRACTION: f32 = 0.12;
@@ -110,10 +114,17 @@ impl Session {
                 s.hard[y * w + w - 1] = HARD_BG;
             }
         }
-        let tau = s.border_tau;
-        s.labels = (0..w * h)
-            .map(|i| !is_bg(s.hard[i]) && s.border_nll[i] > tau)
-            .collect();
+        s.labels = match coarse_labels(photo, opts)? {
+            // Coarse to fine: the half-size result starts the fit here, so the full-size cuts
+            // only move the outline (cheap) instead of settling the whole image (costly).
+            Some(coarse) => (0..w * h).map(|i| !is_bg(s.hard[i]) && coarse[i]).collect(),
+            None => {
+                let tau = s.border_tau;
+                (0..w * h)
+                    .map(|i| !is_bg(s.hard[i]) && s.border_nll[i] > tau)
+                    .collect()
+            }
+        };
         let iterations = s.opts.iterations;
         s.run(iterations, true)?;
         Ok(s)
@@ -242,7 +253,11 @@ impl Session {
                 break;
             }
             self.fit_models(&fit_labels, fresh && it == 0)?;
-            self.cut();
+            let changed = self.cut();
+            // Converged: another colour fit would reproduce the same cut.
+            if changed <= n / 2000 {
+                break;
+            }
         }
         self.finish()
     }
@@ -303,9 +318,10 @@ impl Session {
     }
 
     /// One min-cut of GrabCut's energy with the current colour models (eq. 7–11).
-    fn cut(&mut self) {
+    /// Returns how many pixels changed label.
+    fn cut(&mut self) -> usize {
         let (Some(fg), Some(bg)) = (&self.fg, &self.bg) else {
-            return;
+            return 0;
         };
         let (w, h) = (self.w, self.h);
         for (i, c) in self.colors.iter().enumerate() {
@@ -315,15 +331,19 @@ impl Session {
 
         let (hard, dfg, dbg) = (&self.hard, &self.dfg, &self.dbg);
         let g = &mut self.graph;
-        cut_grid(g, w, h, &self.nlinks, |i| match hard[i] {
+        cut_grid(g, w, h, &self.nlinks, true, |i| match hard[i] {
             HARD_FG => HARD,
             h if is_bg(h) => -HARD,
             // Only the difference of the data terms matters to the cut.
             _ => dbg[i] - dfg[i],
         });
+        let mut changed = 0;
         for i in 0..w * h {
-            self.labels[i] = g.is_source(i);
+            let l = g.is_source(i);
+            changed += usize::from(l != self.labels[i]);
+            self.labels[i] = l;
         }
+        changed
     }
 
     /// Clean-up (largest component, holes), don't-care band, bounding box and confidence.
@@ -437,17 +457,45 @@ pub(super) fn build_segmentation(
     })
 }
 
+/// Automatic segmentation of the half-size photo, upsampled to full size; `None` when the
+/// photo is already small or nothing was found at half size.
+fn coarse_labels(photo: &Photo, opts: &Options) -> Result<Option<Vec<bool>>, SegmentError> {
+    let (w, h) = (photo.width() as usize, photo.height() as usize);
+    if w * h < COARSE_MIN_PIXELS {
+        return Ok(None);
+    }
+    let (cw, ch) = (w / 2, h / 2);
+    let (rgba, _) = area_resample(photo.rgba(), w as u32, h as u32, 4, cw as u32, ch as u32);
+    let small = Photo::from_parts(cw as u32, ch as u32, rgba, photo.source_size());
+    let coarse = Session::automatic(&small, opts)?;
+    if coarse.result.bbox.is_none() {
+        return Ok(None);
+    }
+    let up = (0..w * h)
+        .map(|i| {
+            let (x, y) = ((i % w / 2).min(cw - 1), (i / w / 2).min(ch - 1));
+            coarse.labels[y * cw + x]
+        })
+        .collect();
+    Ok(Some(up))
+}
+
 /// Builds GrabCut's grid graph in `g` and cuts it: `data(i)` is the pixel's preference for the
 /// source (object) side, > 0 object, < 0 background (a difference of data terms, or ±[`HARD`]);
-/// edges link each pixel to its eight neighbours with the `nlinks` weights.
+/// edges link each pixel to its eight neighbours with the `nlinks` weights. With `reuse`, a
+/// graph already built by an earlier call for the same grid and weights only gets its
+/// capacities restored (the n-links never change within a session).
 pub(super) fn cut_grid(
     g: &mut Graph,
     w: usize,
     h: usize,
     nlinks: &[[f32; 4]],
+    reuse: bool,
     data: impl Fn(usize) -> f32,
 ) {
-    g.reset(w * h, 4 * w * h);
+    if !(reuse && g.nodes() == w * h && g.restore()) {
+        build_grid(g, w, h, nlinks);
+    }
     for i in 0..w * h {
         let d = data(i).clamp(-HARD, HARD);
         if d > 0.0 {
@@ -456,6 +504,11 @@ pub(super) fn cut_grid(
             g.add_tweights(i, 0.0, -d);
         }
     }
+    g.maxflow();
+}
+
+fn build_grid(g: &mut Graph, w: usize, h: usize, nlinks: &[[f32; 4]]) {
+    g.reset(w * h, 4 * w * h);
     for y in 0..h {
         for x in 0..w {
             let i = y * w + x;
@@ -474,7 +527,7 @@ pub(super) fn cut_grid(
             }
         }
     }
-    g.maxflow();
+    g.save();
 }
 
 /// Bounding box of the `true` pixels (end exclusive), if any.
