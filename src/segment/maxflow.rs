@@ -475,12 +475,11 @@ mod tests {
         assert!((g.maxflow() - 1.0).abs() < 1e-6);
         g.reset(2, 1);
         g.add_edge(0, 1, 2.0, 0.0);
+        g.save();
         g.add_tweights(0, 5.0, 0.0);
         g.add_tweights(1, 0.0, 5.0);
         assert!((g.maxflow() - 2.0).abs() < 1e-6);
-        g.save();
-        g.add_tweights(0, 1.0, 0.0);
-        g.maxflow();
+        // Restored: the edge has its full capacity again and the old terminal links are gone.
         assert!(g.restore());
         g.add_tweights(0, 0.5, 0.0);
         g.add_tweights(1, 0.0, 5.0);
