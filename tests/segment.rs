@@ -662,8 +662,12 @@ fn truncated_jpeg_is_an_error_or_a_usable_photo_never_a_panic() {
     let bytes = jpeg(&img, 85);
     for keep in [20, 200, bytes.len() / 3, bytes.len() / 2, bytes.len() - 10] {
         match Photo::decode(&bytes[..keep], WORKING_SIDE) {
-            Err(e) => assert!(e.0.contains("cannot"), "{keep} bytes: {e}"),
+            Err(e) => {
+                eprintln!("truncated to {keep} bytes: {e}");
+                assert!(e.0.contains("cannot"), "{keep} bytes: {e}");
+            }
             Ok(photo) => {
+                eprintln!("truncated to {keep} bytes: decoded");
                 // Whatever the decoder made of it must segment without panicking.
                 let _ = segment_auto(&photo);
             }
@@ -722,6 +726,10 @@ fn object_filling_the_frame_is_flagged() {
     let (img, _) = render(&scene, 12);
     let photo = Photo::decode(&jpeg(&img, 85), WORKING_SIDE).unwrap();
     let seg = segment_auto(&photo).unwrap();
+    eprintln!(
+        "frame-filling cup: {:?}, confidence {}",
+        seg.warnings, seg.confidence
+    );
     assert!(
         seg.is_low_confidence(),
         "{:?} {}",
@@ -814,5 +822,26 @@ fn coffee_photo_smoke_test() {
         (b.y1, 341, 10),
     ] {
         assert!(got.abs_diff(want) <= tol, "bbox {b:?}");
+    }
+}
+
+// ---------------------------------------------------------------- tidy
+
+/// `std::time::Instant` panics on wasm32: segmentation code must never read a clock.
+#[test]
+fn segmentation_code_reads_no_clock() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/src/segment");
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        let text = std::fs::read_to_string(&path).unwrap();
+        for (n, line) in text.lines().enumerate() {
+            let code = line.split("//").next().unwrap_or("");
+            assert!(
+                !code.contains("Instant") && !code.contains("SystemTime"),
+                "{}:{}: {line}",
+                path.display(),
+                n + 1
+            );
+        }
     }
 }

@@ -22,6 +22,8 @@ use crate::mask::Mask;
 /// Photos with at least this many pixels are first segmented at half size (coarse to fine);
 /// the half-size image then has at least 160×120 pixels.
 const COARSE_MIN_PIXELS: usize = 4 * 160 * 120;
+/// Half-width of the band around the coarse outline that full-size cuts may relabel.
+const BAND: usize = 6;
 /// Smoothness weight γ of GrabCut's energy (eq. 11; the paper's value).
 const GAMMA: f32 = 50.0;
 /// Capacity of a hard constraint: larger than any cut through a pixel's eight n-links.
@@ -114,7 +116,9 @@ impl Session {
                 s.hard[y * w + w - 1] = HARD_BG;
             }
         }
-        s.labels = match coarse_labels(photo, opts)? {
+        let start = coarse_labels(photo, opts)?;
+        let coarse = start.is_some();
+        s.labels = match start {
             // Coarse to fine: the half-size result starts the fit here, so the full-size cuts
             // only move the outline (cheap) instead of settling the whole image (costly).
             Some(coarse) => (0..w * h).map(|i| !is_bg(s.hard[i]) && coarse[i]).collect(),
@@ -126,7 +130,7 @@ impl Session {
             }
         };
         let iterations = s.opts.iterations;
-        s.run(iterations, true)?;
+        s.run(iterations, true, coarse)?;
         Ok(s)
     }
 
@@ -137,7 +141,7 @@ impl Session {
         s.set_rect(rect)?;
         s.labels = (0..s.w * s.h).map(|i| !is_bg(s.hard[i])).collect();
         let iterations = s.opts.iterations;
-        s.run(iterations, true)?;
+        s.run(iterations, true, false)?;
         Ok(s)
     }
 
@@ -188,7 +192,7 @@ impl Session {
         let iterations = self.opts.recut_iterations.max(1);
         // Fresh fits: a stroke can remove a colour from a model entirely, which a refit of the
         // old components (one of them fitted to that colour) would not do.
-        self.run(iterations, true)?;
+        self.run(iterations, true, false)?;
         Ok(&self.result)
     }
 
@@ -240,7 +244,10 @@ impl Session {
 
     /// Colour-model fits and cuts; with `fresh` the first fit starts from k-means instead of the
     /// previous models (later ones always refine the previous models, as GrabCut does).
-    fn run(&mut self, iterations: usize, fresh: bool) -> Result<(), SegmentError> {
+    ///
+    /// With `band`, each cut only relabels pixels within [`BAND`] of the current outline (the
+    /// outline came from the half-size result, so it is off by a pixel or two at most).
+    fn run(&mut self, iterations: usize, fresh: bool, band: bool) -> Result<(), SegmentError> {
         let n = self.w * self.h;
         let min_object = (n / 2000).max(4);
         for it in 0..iterations {
@@ -253,7 +260,13 @@ impl Session {
                 break;
             }
             self.fit_models(&fit_labels, fresh && it == 0)?;
-            let changed = self.cut();
+            let changed = if band {
+                let active = morph::boundary_band(&fit_labels, self.w, self.h, BAND);
+                self.labels = fit_labels;
+                self.cut_band(&active)
+            } else {
+                self.cut()
+            };
             // Converged: another colour fit would reproduce the same cut.
             if changed <= n / 2000 {
                 break;
@@ -346,6 +359,79 @@ impl Session {
         changed
     }
 
+    /// A cut restricted to the `active` pixels; the others keep their labels and act on their
+    /// active neighbours through the n-links, as terminal links. Returns the changed count.
+    fn cut_band(&mut self, active: &[bool]) -> usize {
+        let (Some(fg), Some(bg)) = (&self.fg, &self.bg) else {
+            return 0;
+        };
+        let (w, h) = (self.w, self.h);
+        for (i, c) in self.colors.iter().enumerate() {
+            self.dfg[i] = fg.nll(c);
+            self.dbg[i] = bg.nll(c);
+        }
+        let mut node = vec![u32::MAX; w * h];
+        let mut pixels = Vec::new();
+        for (i, _) in active.iter().enumerate().filter(|(_, a)| **a) {
+            node[i] = pixels.len() as u32;
+            pixels.push(i);
+        }
+        let g = &mut self.graph;
+        g.reset(pixels.len(), 4 * pixels.len());
+        // Neighbour offsets with the index of their weight in `nlinks` (of the upper-left pixel
+        // of the pair, which stores it).
+        let dirs: [(isize, isize, usize); 8] = [
+            (1, 0, 0),
+            (0, 1, 1),
+            (1, 1, 2),
+            (-1, 1, 3),
+            (-1, 0, 0),
+            (0, -1, 1),
+            (-1, -1, 2),
+            (1, -1, 3),
+        ];
+        for (k, &i) in pixels.iter().enumerate() {
+            let mut d = match self.hard[i] {
+                HARD_FG => HARD,
+                h if is_bg(h) => -HARD,
+                _ => self.dbg[i] - self.dfg[i],
+            };
+            let (x, y) = ((i % w) as isize, (i / w) as isize);
+            for (n, &(dx, dy, slot)) in dirs.iter().enumerate() {
+                let (nx, ny) = (x + dx, y + dy);
+                if nx < 0 || ny < 0 || nx >= w as isize || ny >= h as isize {
+                    continue;
+                }
+                let j = ny as usize * w + nx as usize;
+                let wgt = if n < 4 {
+                    self.nlinks[i][slot]
+                } else {
+                    self.nlinks[j][slot]
+                };
+                if node[j] == u32::MAX {
+                    // A fixed neighbour pulls towards its own label.
+                    d += if self.labels[j] { wgt } else { -wgt };
+                } else if n < 4 {
+                    g.add_edge(k, node[j] as usize, wgt, wgt);
+                }
+            }
+            let d = d.clamp(-HARD, HARD);
+            if d > 0.0 {
+                g.add_tweights(k, d, 0.0);
+            } else {
+                g.add_tweights(k, 0.0, -d);
+            }
+        }
+        g.maxflow();
+        let mut changed = 0;
+        for (k, &i) in pixels.iter().enumerate() {
+            let l = g.is_source(k);
+            changed += usize::from(l != self.labels[i]);
+            self.labels[i] = l;
+        }
+        changed
+    }
+
     /// Clean-up (largest component, holes), don't-care band, bounding box and confidence.
     fn finish(&mut self) -> Result<(), SegmentError> {
         let (w, h) = (self.w, self.h);
@@ -373,7 +459,9 @@ impl Session {
         let frac = area as f32 / n as f32;
         if frac < 0.002 {
             warnings.push(
-                "no distinct object found: the image looks like its border everywhere".to_owned(),
+                "no distinct object found: the whole image looks like its border \
+                 (a uniform image, or an object filling the frame)"
+                    .to_owned(),
             );
         } else if frac > 0.9 {
             warnings.push("the object seems to fill the whole frame".to_owned());
