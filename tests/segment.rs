@@ -9,8 +9,8 @@ use image::{DynamicImage, ExtendedColorType, ImageEncoder, RgbImage, RgbaImage};
 use procfit::mask::Mask;
 use procfit::segment::windows::{LABEL_WINDOW, detect_windows, windows_from_strokes};
 use procfit::segment::{
-    BBox, Label, Options, Photo, Segmentation, Session, Stroke, WORKING_SIDE, segment_alpha,
-    segment_auto, segment_mask_image,
+    BBox, Label, Options, Photo, Segmentation, Session, Stroke, WORKING_SIDE, segment,
+    segment_alpha, segment_auto, segment_mask_image,
 };
 
 // ---------------------------------------------------------------- synthetic photos
@@ -39,6 +39,8 @@ enum Bg {
     Textured,
     /// Wall above, a wooden table below 70 % of the height.
     Table,
+    /// Sharp-edged cells of many colours (a patterned cloth): strong edges everywhere.
+    Cells,
 }
 
 fn background(bg: Bg, u: f32, v: f32, rng: &mut Rng) -> [f32; 3] {
@@ -61,6 +63,38 @@ fn background(bg: Bg, u: f32, v: f32, rng: &mut Rng) -> [f32; 3] {
             } else {
                 [0.80 + stripe, 0.82 + stripe, 0.84 + stripe]
             }
+        }
+        Bg::Cells => {
+            const PALETTE: [[f32; 3]; 6] = [
+                [0.35, 0.55, 0.3],
+                [0.2, 0.3, 0.55],
+                [0.85, 0.75, 0.35],
+                [0.6, 0.6, 0.62],
+                [0.5, 0.35, 0.6],
+                [0.15, 0.2, 0.3],
+            ];
+            let hash = |a: i32, b: i32, k: u32| {
+                let mut x =
+                    (a as u32).wrapping_mul(73_856_093) ^ (b as u32).wrapping_mul(19_349_663) ^ k;
+                x ^= x >> 13;
+                x = x.wrapping_mul(0x5bd1_e995);
+                x ^= x >> 15;
+                x
+            };
+            let (gx, gy) = (u * 12.0, v * 9.0);
+            let mut best = (f32::INFINITY, 0u32);
+            for dy in -1..=1 {
+                for dx in -1..=1 {
+                    let (cx, cy) = (gx.floor() as i32 + dx, gy.floor() as i32 + dy);
+                    let px = cx as f32 + (hash(cx, cy, 1) % 1000) as f32 / 1000.0;
+                    let py = cy as f32 + (hash(cx, cy, 2) % 1000) as f32 / 1000.0;
+                    let d = (px - gx).powi(2) + (py - gy).powi(2);
+                    if d < best.0 {
+                        best = (d, hash(cx, cy, 3));
+                    }
+                }
+            }
+            PALETTE[(best.1 % 6) as usize]
         }
         Bg::Table => {
             if v > 0.7 {
@@ -248,6 +282,17 @@ fn check_auto(bg: Bg, min_iou: f64) {
     let (img, truth) = render(&scene, 11);
     let photo = Photo::decode(&jpeg(&img, 85), WORKING_SIDE).unwrap();
     let seg = segment_auto(&photo).unwrap();
+    if let Ok(dir) = std::env::var("PROCFIT_SEGMENT_DEBUG_DIR") {
+        // Look at what was segmented: the input and the mask (grey = don't care).
+        img.save(format!("{dir}/auto_{bg:?}.png")).unwrap();
+        let m = png(
+            &seg.mask.to_luma8(),
+            scene.w,
+            scene.h,
+            ExtendedColorType::L8,
+        );
+        std::fs::write(format!("{dir}/auto_{bg:?}_mask.png"), m).unwrap();
+    }
     let got = object_of(&seg);
     let score = iou(&got, &truth);
     eprintln!(
@@ -312,6 +357,10 @@ fn auto_noisy() {
 #[test]
 fn auto_textured() {
     check_auto(Bg::Textured, 0.92);
+}
+#[test]
+fn auto_cells() {
+    check_auto(Bg::Cells, 0.92);
 }
 #[test]
 fn auto_table() {
@@ -472,6 +521,11 @@ fn alpha_channel_gives_the_mask() {
     let photo = Photo::decode(&bytes, WORKING_SIDE).unwrap();
     let seg = segment_alpha(&photo).unwrap();
     assert_eq!(object_of(&seg), truth);
+    assert_eq!(
+        segment(&photo).unwrap(),
+        seg,
+        "segment() prefers the alpha channel"
+    );
     assert!(!seg.is_low_confidence());
     let opaque = Photo::decode(&jpeg(&img, 80), WORKING_SIDE).unwrap();
     assert!(
@@ -517,10 +571,16 @@ fn large_photo_is_downscaled_before_segmentation() {
     let photo = Photo::decode(&jpeg(&img, 85), WORKING_SIDE).unwrap();
     assert_eq!((photo.width(), photo.height()), (512, 384));
     assert_eq!(photo.source_size(), (1600, 1200));
+    // The browser path: raw RGBA of the same photo, downscaled the same way.
+    let rgba = DynamicImage::ImageRgb8(img).to_rgba8();
+    let raw = Photo::from_rgba(1600, 1200, rgba.as_raw(), WORKING_SIDE).unwrap();
+    assert_eq!((raw.width(), raw.height()), (512, 384));
     (scene.w, scene.h) = (512, 384);
     let (_, truth) = render(&scene, 2);
-    let score = iou(&object_of(&segment_auto(&photo).unwrap()), &truth);
-    assert!(score >= 0.97, "IoU {score}");
+    for p in [&photo, &raw] {
+        let score = iou(&object_of(&segment(p).unwrap()), &truth);
+        assert!(score >= 0.97, "IoU {score}");
+    }
 }
 
 // ---------------------------------------------------------------- windows

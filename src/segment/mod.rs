@@ -113,6 +113,16 @@ impl Segmentation {
     }
 }
 
+/// The default way: the photo's own alpha channel if it has transparency (its background was
+/// already removed), else automatic segmentation.
+pub fn segment(photo: &Photo) -> Result<Segmentation, SegmentError> {
+    if photo.has_alpha() {
+        segment_alpha(photo)
+    } else {
+        segment_auto(photo)
+    }
+}
+
 /// Automatic segmentation with default options.
 pub fn segment_auto(photo: &Photo) -> Result<Segmentation, SegmentError> {
     Ok(Session::automatic(photo, &Options::default())?
