@@ -905,3 +905,101 @@ fn segmentation_code_reads_no_clock() {
         }
     }
 }
+
+/// A hand-made 16×16 baseline JPEG with four components (Adobe CMYK, no transform), each
+/// uniform: only DC coefficients, standard luminance DC table, a one-code AC table (EOB).
+fn cmyk_jpeg(cmyk: [u8; 4]) -> Vec<u8> {
+    let mut j = vec![0xFF, 0xD8];
+    // APP14 "Adobe", version 100, flags 0, transform 0 (CMYK as is).
+    j.extend([0xFF, 0xEE, 0, 14]);
+    j.extend(b"Adobe");
+    j.extend([0, 100, 0, 0, 0, 0, 0]);
+    // One quantisation table of ones.
+    j.extend([0xFF, 0xDB, 0, 67, 0]);
+    j.extend([1u8; 64]);
+    // SOF0: 8-bit, 16×16, four components, no subsampling, table 0.
+    j.extend([0xFF, 0xC0, 0, 20, 8, 0, 16, 0, 16, 4]);
+    for id in 1..=4 {
+        j.extend([id, 0x11, 0]);
+    }
+    // DC table 0 (standard luminance) and AC table 0 holding only EOB as the code "0".
+    let dc_bits = [0u8, 1, 5, 1, 1, 1, 1, 1, 1, 0, 0, 0, 0, 0, 0, 0];
+    j.extend([0xFF, 0xC4, 0, 2 + 17 + 12, 0x00]);
+    j.extend(dc_bits);
+    j.extend(0u8..12);
+    j.extend([0xFF, 0xC4, 0, 2 + 17 + 1, 0x10, 1]);
+    j.extend([0u8; 15]);
+    j.push(0);
+    // SOS over the four components.
+    j.extend([0xFF, 0xDA, 0, 14, 4]);
+    for id in 1..=4 {
+        j.extend([id, 0x00]);
+    }
+    j.extend([0, 63, 0]);
+    // Standard DC luminance codes per category (code, length).
+    let dc_code = |cat: u32| -> (u32, u32) {
+        match cat {
+            0 => (0b00, 2),
+            1 => (0b010, 3),
+            2 => (0b011, 3),
+            3 => (0b100, 3),
+            4 => (0b101, 3),
+            5 => (0b110, 3),
+            c => ((1 << (c - 2)) - 2, c - 2),
+        }
+    };
+    let mut bits: Vec<bool> = Vec::new();
+    let put = |v: u32, n: u32, bits: &mut Vec<bool>| {
+        for k in (0..n).rev() {
+            bits.push(v >> k & 1 == 1);
+        }
+    };
+    for mcu in 0..4 {
+        for &c in &cmyk {
+            let diff = if mcu == 0 {
+                8 * (i32::from(c) - 128)
+            } else {
+                0
+            };
+            let cat = 32 - diff.unsigned_abs().leading_zeros();
+            let (code, len) = dc_code(cat);
+            put(code, len, &mut bits);
+            let extra = if diff < 0 { diff - 1 } else { diff } as u32 & ((1 << cat) - 1);
+            put(extra, cat, &mut bits);
+            put(0, 1, &mut bits); // EOB
+        }
+    }
+    while bits.len() % 8 != 0 {
+        bits.push(true);
+    }
+    for byte in bits.chunks(8) {
+        let b = byte.iter().fold(0u8, |a, &x| a << 1 | u8::from(x));
+        j.push(b);
+        if b == 0xFF {
+            j.push(0);
+        }
+    }
+    j.extend([0xFF, 0xD9]);
+    j
+}
+
+/// CMYK JPEGs (Adobe's inverted convention, as Photoshop writes them) decode to RGB
+/// `(c·k, m·k, y·k) / 255` of the stored values.
+#[test]
+fn cmyk_jpeg_decodes_to_rgb() {
+    let cmyk = [20u8, 200, 180, 250];
+    let photo = Photo::decode(&cmyk_jpeg(cmyk), WORKING_SIDE).unwrap();
+    assert_eq!((photo.width(), photo.height()), (16, 16));
+    let k = f32::from(cmyk[3]) / 255.0;
+    let want = [0, 1, 2].map(|c| f32::from(cmyk[c]) * k);
+    for p in photo.rgba().chunks_exact(4) {
+        for c in 0..3 {
+            assert!(
+                (f32::from(p[c]) - want[c]).abs() <= 2.0,
+                "{p:?} vs {want:?}"
+            );
+        }
+    }
+    // A uniform photo has no object: flagged, not a panic.
+    assert!(segment_auto(&photo).unwrap().is_low_confidence());
+}
