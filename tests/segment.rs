@@ -463,6 +463,44 @@ fn background_stroke_removes_a_wrongly_included_saucer() {
 }
 
 #[test]
+fn object_stroke_keeps_a_part_cut_off_by_a_background_coloured_band() {
+    // A wall-coloured band around the cup's foot splits it in two: automatic mode keeps the
+    // larger upper part only; an object stroke on the foot brings it back.
+    let y0 = 0.62;
+    let band = Shape::Rect([0.3, y0, 0.95, y0 + 0.04], [0.86, 0.86, 0.83]);
+    let scene = Scene {
+        w: 360,
+        h: 270,
+        bg: Bg::Plain,
+        shapes: vec![band, Shape::Cup(CUP)],
+        truth_shapes: 2,
+    };
+    let (img, truth) = render(&scene, 21);
+    let s = scene.h as f32;
+    let foot: Vec<usize> = (0..truth.len())
+        .filter(|&i| truth[i] && (i / scene.w as usize) as f32 > (y0 + 0.05) * s)
+        .collect();
+    let kept = |seg: &Segmentation| {
+        let o = object_of(seg);
+        foot.iter().filter(|&&i| o[i]).count() as f64 / foot.len() as f64
+    };
+    let photo = Photo::decode(&jpeg(&img, 85), WORKING_SIDE).unwrap();
+    let mut session = Session::automatic(&photo, &Options::default()).unwrap();
+    let before = kept(session.segmentation());
+    assert!(before < 0.05, "the foot should be lost at first: {before}");
+    session
+        .add_stroke(&Stroke {
+            label: Label::Object,
+            points: vec![[CUP.cx * s, (CUP.bottom - 0.05) * s]],
+            radius: 3.0,
+        })
+        .unwrap();
+    let after = kept(session.recut().unwrap());
+    eprintln!("foot: {before:.3} kept before the stroke, {after:.3} after");
+    assert!(after >= 0.97, "after the stroke the foot is {after} kept");
+}
+
+#[test]
 fn rectangle_selects_the_smaller_of_two_objects() {
     let small = Cup {
         cx: 1.0,
@@ -633,7 +671,8 @@ fn windows_detected_and_painted() {
     let labels = detect_windows(&photo, &seg).unwrap();
     let got: Vec<bool> = labels.labels().iter().map(|&l| l == LABEL_WINDOW).collect();
     let score = iou(&got, &win_truth);
-    assert!(score >= 0.85, "detected windows: IoU {score}");
+    eprintln!("windows: detected IoU {score:.4}");
+    assert!(score >= 0.9, "detected windows: IoU {score}");
     // Strokes: two windows painted, one wall stroke.
     let centre = |r: [f32; 4]| [(r[0] + r[2]) / 2.0 * s, (r[1] + r[3]) / 2.0 * s];
     let strokes = [
@@ -656,7 +695,8 @@ fn windows_detected_and_painted() {
     let labels = windows_from_strokes(&photo, &seg, &strokes).unwrap();
     let got: Vec<bool> = labels.labels().iter().map(|&l| l == LABEL_WINDOW).collect();
     let score = iou(&got, &win_truth);
-    assert!(score >= 0.85, "painted windows: IoU {score}");
+    eprintln!("windows: painted IoU {score:.4}");
+    assert!(score >= 0.95, "painted windows: IoU {score}");
 }
 
 // ---------------------------------------------------------------- bad input
