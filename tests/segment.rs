@@ -500,6 +500,34 @@ fn object_stroke_keeps_a_part_cut_off_by_a_background_coloured_band() {
     assert!(after >= 0.97, "after the stroke the foot is {after} kept");
 }
 
+/// Touch-up strokes straddling the outline (half on the cup, half on the wall) fix their own
+/// pixels and must not take their colours out of either model: a background stroke that
+/// half covers the cup would otherwise remove the cup's red from the object model.
+#[test]
+fn sloppy_strokes_across_the_outline_keep_the_mask() {
+    check_sloppy(Label::Object);
+    check_sloppy(Label::Background);
+}
+
+fn check_sloppy(label: Label) {
+    let scene = cup_scene(Bg::Gradient);
+    let (img, truth) = render(&scene, 17);
+    let photo = Photo::decode(&jpeg(&img, 85), WORKING_SIDE).unwrap();
+    let mut session = Session::automatic(&photo, &Options::default()).unwrap();
+    let s = scene.h as f32;
+    let edge = CUP.cx - CUP.radius(0.3).unwrap();
+    session
+        .add_stroke(&Stroke {
+            label,
+            points: vec![[(edge - 0.04) * s, 0.3 * s], [(edge + 0.04) * s, 0.3 * s]],
+            radius: 6.0,
+        })
+        .unwrap();
+    let score = iou(&object_of(session.recut().unwrap()), &truth);
+    eprintln!("sloppy {label:?} stroke: IoU {score:.4}");
+    assert!(score >= 0.97, "IoU {score} after a sloppy {label:?} stroke");
+}
+
 #[test]
 fn rectangle_selects_the_smaller_of_two_objects() {
     let small = Cup {

@@ -43,12 +43,23 @@ const STROKE_MARGIN: f32 = 6.0;
 const NONE: u8 = 0;
 const HARD_FG: u8 = 1;
 const HARD_BG: u8 = 2;
-/// Background painted by a user stroke (a statement about its colour too, unlike the border
-/// ring or the outside of a rectangle).
+/// Background painted by a correcting user stroke: a statement about its colour too (see
+/// [`Session::add_stroke`]).
 const STROKE_BG: u8 = 3;
+/// Background painted by a user stroke that only fixes its own pixels.
+const PAINT_BG: u8 = 4;
+/// Object painted by a correcting user stroke (colour semantics, like [`STROKE_BG`]).
+const STROKE_FG: u8 = 5;
+/// Share of a stroke's pixels that must have had the opposite label for the stroke to count
+/// as a correction of a colour rather than a touch-up of pixels.
+const CORRECTION_SHARE: f32 = 0.8;
 
 fn is_bg(h: u8) -> bool {
-    h == HARD_BG || h == STROKE_BG
+    h == HARD_BG || h == STROKE_BG || h == PAINT_BG
+}
+
+fn is_fg(h: u8) -> bool {
+    h == HARD_FG || h == STROKE_FG
 }
 
 /// Options of automatic segmentation.
@@ -174,16 +185,30 @@ impl Session {
     }
 
     /// Paints a stroke of hard constraints (object or background) along a polyline.
+    ///
+    /// A stroke lying mostly (≥ 80 %) on pixels that had the other label is a correction and
+    /// also speaks for its colours: "this stuff is background" removes the stroke's colours from
+    /// the object's colour model (and vice versa), so a whole wrongly included region goes with
+    /// one stroke. A stroke that straddles the outline (a touch-up, or a sloppy one) only fixes
+    /// its own pixels, so it cannot flood the image.
     pub fn add_stroke(&mut self, stroke: &Stroke) -> Result<(), SegmentError> {
-        let value = match stroke.label {
-            Label::Object => HARD_FG,
-            Label::Background => STROKE_BG,
-        };
         let (w, h) = (self.w, self.h);
-        for_stroke_pixels(stroke, w, h, |i| {
+        let mut pixels = Vec::new();
+        for_stroke_pixels(stroke, w, h, |i| pixels.push(i))?;
+        let object = stroke.label == Label::Object;
+        let opposite = pixels.iter().filter(|&&i| self.labels[i] != object).count();
+        let correction = opposite as f32 >= CORRECTION_SHARE * pixels.len() as f32;
+        let value = match (object, correction) {
+            (true, true) => STROKE_FG,
+            (true, false) => HARD_FG,
+            (false, true) => STROKE_BG,
+            (false, false) => PAINT_BG,
+        };
+        for i in pixels {
             self.hard[i] = value;
-            self.labels[i] = value == HARD_FG;
-        })
+            self.labels[i] = object;
+        }
+        Ok(())
     }
 
     /// Re-runs the cut after rectangles or strokes changed: fits the colour models to the
@@ -253,7 +278,7 @@ impl Session {
         for it in 0..iterations {
             let hard = &self.hard;
             let fit_labels =
-                morph::largest_component(&self.labels, self.w, self.h, &|i| hard[i] == HARD_FG);
+                morph::largest_component(&self.labels, self.w, self.h, &|i| is_fg(hard[i]));
             let fg_count = fit_labels.iter().filter(|&&l| l).count();
             if fg_count < min_object {
                 self.labels = fit_labels;
@@ -279,20 +304,20 @@ impl Session {
         // Colours the user marked as background are no evidence for the object, and vice
         // versa: a stroke means "this colour belongs there", not only "these pixels".
         let exclude_fg = stroke_colour_filter(&self.colors, &self.hard, STROKE_BG);
-        let exclude_bg = stroke_colour_filter(&self.colors, &self.hard, HARD_FG);
+        let exclude_bg = stroke_colour_filter(&self.colors, &self.hard, STROKE_FG);
         let mut fg_s = Vec::new();
         let mut bg_s = Vec::new();
         let n = labels.len();
         let stride = (n / MAX_SAMPLES).max(1);
         for i in (0..n).step_by(stride) {
             let c = &self.colors[i];
-            let is_fg = match self.hard[i] {
-                HARD_FG => true,
+            let object = match self.hard[i] {
+                h if is_fg(h) => true,
                 h if is_bg(h) => false,
                 _ => labels[i],
             };
-            if is_fg {
-                if self.hard[i] == HARD_FG || !exclude_fg.as_ref().is_some_and(|f| f(c)) {
+            if object {
+                if is_fg(self.hard[i]) || !exclude_fg.as_ref().is_some_and(|f| f(c)) {
                     fg_s.push(*c);
                 }
             } else if is_bg(self.hard[i]) || !exclude_bg.as_ref().is_some_and(|f| f(c)) {
@@ -303,7 +328,7 @@ impl Session {
         for i in 0..n {
             if i % stride != 0 {
                 match self.hard[i] {
-                    HARD_FG if fg_s.len() < 2 * MAX_SAMPLES => fg_s.push(self.colors[i]),
+                    h if is_fg(h) && fg_s.len() < 2 * MAX_SAMPLES => fg_s.push(self.colors[i]),
                     h if is_bg(h) && bg_s.len() < 2 * MAX_SAMPLES && i % 4 == 0 => {
                         bg_s.push(self.colors[i])
                     }
@@ -345,7 +370,7 @@ impl Session {
         let (hard, dfg, dbg) = (&self.hard, &self.dfg, &self.dbg);
         let g = &mut self.graph;
         cut_grid(g, w, h, &self.nlinks, true, |i| match hard[i] {
-            HARD_FG => HARD,
+            h if is_fg(h) => HARD,
             h if is_bg(h) => -HARD,
             // Only the difference of the data terms matters to the cut.
             _ => dbg[i] - dfg[i],
@@ -392,7 +417,7 @@ impl Session {
         ];
         for (k, &i) in pixels.iter().enumerate() {
             let mut d = match self.hard[i] {
-                HARD_FG => HARD,
+                h if is_fg(h) => HARD,
                 h if is_bg(h) => -HARD,
                 _ => self.dbg[i] - self.dfg[i],
             };
@@ -437,12 +462,14 @@ impl Session {
         let (w, h) = (self.w, self.h);
         let n = w * h;
         let hard = &self.hard;
-        let mut obj = morph::largest_component(&self.labels, w, h, &|i| hard[i] == HARD_FG);
+        let mut obj = morph::largest_component(&self.labels, w, h, &|i| is_fg(hard[i]));
         // Fill holes unless they are real: a hole whose colours match the border background
         // (a handle's loop) or that the user marked as background stays open.
         let min_hole = (n / 4000).max(6);
         for hole in morph::holes(&obj, w, h) {
-            let marked = hole.iter().any(|&i| self.hard[i] == STROKE_BG);
+            let marked = hole
+                .iter()
+                .any(|&i| self.hard[i] == STROKE_BG || self.hard[i] == PAINT_BG);
             let bg_like = hole
                 .iter()
                 .filter(|&&i| self.border_nll[i] <= self.border_tau)
