@@ -10,7 +10,18 @@
 //! border. The object may touch one border (it stands on a table or the floor): each side of the
 //! border is tested against a model of the other three, and a side whose colours the others do
 //! not explain gets no hard background constraint and lends only its explained pixels to the
-//! border model.
+//! border model. Pixels whose colour the border model does not explain start as object.
+//!
+//! Automatic mode runs coarse to fine: the photo is first segmented at half size (recursively,
+//! down to ~160×120), and the full-size cuts then only relabel a band of six pixels around
+//! the upsampled outline — the expensive part of a cut is settling the whole image, which the
+//! small image does cheaply.
+//!
+//! Clean-up keeps the largest 8-connected component (plus any component the user marked as
+//! object) and fills holes, except holes whose colours the border model explains (the loop of
+//! a handle shows the background) and holes the user marked as background.
+//!
+//! Everything is deterministic (no random seeds, no clock), so tests and the page agree.
 
 use super::decode::area_resample;
 use super::gmm::{Gmm, Rgb};
