@@ -879,11 +879,18 @@ fn bad_strokes_and_rectangles_are_refused() {
     assert!(s.add_stroke(&stroke(vec![[f32::NAN, 1.0]], 2.0)).is_err());
     assert!(s.add_stroke(&stroke(vec![], 2.0)).is_err());
     assert!(s.add_stroke(&stroke(vec![[1.0, 1.0]], 0.0)).is_err());
-    // Off-image strokes are clipped, not refused.
+    // Off-image strokes are clipped, not refused; clearing them restores the automatic mask.
+    let initial = object_of(s.segmentation());
+    let diagonal = stroke(vec![[-50.0, -50.0], [1e6, 1e6]], 3.0);
+    assert!(s.add_stroke(&diagonal).is_ok());
+    let stroked = object_of(s.recut().unwrap());
     assert!(
-        s.add_stroke(&stroke(vec![[-50.0, -50.0], [1e6, 1e6]], 3.0))
-            .is_ok()
+        iou(&stroked, &initial) < 0.99,
+        "the diagonal stroke cuts the cup"
     );
+    s.clear_strokes();
+    let cleared = object_of(s.recut().unwrap());
+    assert!(iou(&cleared, &initial) > 0.995);
     let bad = BBox {
         x0: 10,
         y0: 10,

@@ -222,6 +222,16 @@ impl Session {
         Ok(())
     }
 
+    /// Forgets every stroke (the rectangle or border constraints stay); call
+    /// [`Session::recut`] afterwards.
+    pub fn clear_strokes(&mut self) {
+        for h in &mut self.hard {
+            if *h != HARD_BG {
+                *h = NONE;
+            }
+        }
+    }
+
     /// Re-runs the cut after rectangles or strokes changed: fits the colour models to the
     /// current labelling and the strokes, and cuts, `recut_iterations` times.
     pub fn recut(&mut self) -> Result<&Segmentation, SegmentError> {
