@@ -44,5 +44,6 @@ test-e2e: wasm
 
 test: setup-test lint test-rust test-e2e
 
-bench:
+bench: wasm
 	cargo bench --workspace --locked
+	node scripts/bench-wasm.mjs

@@ -30,6 +30,7 @@
 //! - A uniform image, or an object that fills the frame, leaves nothing to learn the
 //!   background from: the result is flagged ([`Segmentation::is_low_confidence`]).
 
+pub mod bench;
 pub mod decode;
 pub mod gmm;
 pub mod grabcut;

@@ -3,6 +3,8 @@
 //! JS error and never unwraps. Compiled for wasm32 only; runs inside `www/worker.js`.
 #![deny(clippy::unwrap_used, clippy::expect_used)]
 
+mod bench;
+
 use std::sync::Mutex;
 use wasm_bindgen::prelude::*;
 
