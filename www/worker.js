@@ -18,7 +18,26 @@ const handlers = {
   [REQUESTS.THREAD_PROBE]: ({ jobs = 64 } = {}) => ({ threads: wasm.threadProbe(jobs) }),
   [REQUESTS.DEBUG_PANIC]: () => wasm.debugPanic(),
   [REQUESTS.GENERATOR_SPECS]: () => wasm.generatorSpecs(),
+  [REQUESTS.GENERATE_GLB]: ({ generator, params, lod }) => {
+    const t0 = performance.now();
+    const bytes = wasm.generateGlb(generator, Float64Array.from(params), lod);
+    const ms = performance.now() - t0;
+    // wasm-bindgen returns a fresh copy, so its buffer can be handed over without another copy.
+    return new Transfer({ glb: bytes.buffer, ms }, [bytes.buffer]);
+  },
+  [REQUESTS.PARAMS_JSON]: ({ generator, params, lod }) => ({
+    text: wasm.paramsJson(generator, Float64Array.from(params), lod),
+  }),
+  [REQUESTS.OPEN_MODEL]: ({ bytes }) => wasm.openModel(new Uint8Array(bytes)),
 };
+
+/** A handler's result whose buffers move to the page instead of being copied. */
+class Transfer {
+  constructor(result, buffers) {
+    this.result = result;
+    this.buffers = buffers;
+  }
+}
 
 function errorOf(err) {
   if (err instanceof WebAssembly.RuntimeError) {
@@ -43,7 +62,8 @@ async function dispatch(msg) {
   const emit = (event, data, transfer = []) => self.postMessage({ id, event, data }, transfer);
   try {
     const result = await handler(payload, emit);
-    self.postMessage({ id, ok: true, result });
+    if (result instanceof Transfer) self.postMessage({ id, ok: true, result: result.result }, result.buffers);
+    else self.postMessage({ id, ok: true, result });
   } catch (err) {
     const error = errorOf(err);
     self.postMessage({ id, ok: false, error });

@@ -153,3 +153,62 @@ pub fn generator_specs() -> Result<JsValue, JsError> {
         .collect();
     serde_wasm_bindgen::to_value(&specs).map_err(|e| JsError::new(&e.to_string()))
 }
+
+/// The model a params JSON text or a procfit GLB describes, as the page keeps it.
+#[derive(serde::Serialize)]
+struct ModelOut {
+    generator: &'static str,
+    params: Vec<f64>,
+    lod: u8,
+    seed: Option<u64>,
+}
+
+impl From<&crate::model::Model> for ModelOut {
+    fn from(m: &crate::model::Model) -> Self {
+        ModelOut {
+            generator: m.generator.name(),
+            params: m.params.clone(),
+            lod: m.lod as u8,
+            seed: m.seed,
+        }
+    }
+}
+
+/// The validated model for the page's `(generator, params, lod)`; every mistake is a message.
+fn model_of(generator: &str, params: &[f64], lod: u8) -> Result<crate::model::Model, JsError> {
+    let lod = crate::generators::Lod::from_index(usize::from(lod))
+        .ok_or_else(|| JsError::new(&format!("level of detail {lod} is not in 0..=3")))?;
+    crate::model::Model::new(generator, params, lod).map_err(|e| JsError::new(&e.to_string()))
+}
+
+/// Generates the model's mesh and writes it as the very GLB the page downloads (generator state
+/// in the scene extras, no cameras). The viewer loads these bytes, so what is shown is what is
+/// saved.
+#[wasm_bindgen(js_name = generateGlb)]
+pub fn generate_glb(generator: &str, params: &[f64], lod: u8) -> Result<Vec<u8>, JsError> {
+    let model = model_of(generator, params, lod)?;
+    crate::glb::export_model(&model, &[]).map_err(|e| JsError::new(&e.to_string()))
+}
+
+/// The params JSON of a model (what "download params" saves).
+#[wasm_bindgen(js_name = paramsJson)]
+pub fn params_json(generator: &str, params: &[f64], lod: u8) -> Result<String, JsError> {
+    Ok(model_of(generator, params, lod)?.to_json())
+}
+
+/// Opens a file the user gave to continue editing: a procfit GLB (told by its magic) or params
+/// JSON. Returns `{ generator, params, lod, seed }` with the parameters validated and clamped;
+/// a GLB from another tool, or JSON that is not procfit's, is an error saying so.
+#[wasm_bindgen(js_name = openModel)]
+pub fn open_model(bytes: &[u8]) -> Result<JsValue, JsError> {
+    let model = if bytes.starts_with(b"glTF") {
+        crate::glb::import_glb(bytes)
+            .and_then(|g| g.model())
+            .map_err(|e| JsError::new(&e.to_string()))?
+    } else {
+        let text = std::str::from_utf8(bytes)
+            .map_err(|_| JsError::new("the file is neither a GLB nor params JSON text"))?;
+        crate::model::Model::from_json(text).map_err(|e| JsError::new(&e.to_string()))?
+    };
+    serde_wasm_bindgen::to_value(&ModelOut::from(&model)).map_err(|e| JsError::new(&e.to_string()))
+}
