@@ -41,6 +41,7 @@ export class Editor extends EventTarget {
     this.reframe = false;
     this.glb = null;
     this.latencies = [];
+    this.timings = [];
   }
 
   /** The state worth saving: generator, params, lod. */
@@ -147,7 +148,7 @@ export class Editor extends EventTarget {
     } else if (p.kind === 'categorical') {
       input = el('select', { id, name: p.name }, p.choices.map((c, k) => el('option', { value: k }, [c])));
     } else {
-      const step = p.kind === 'integer' ? 1 : (p.max - p.min) / 1000;
+      const step = p.kind === 'integer' ? 1 : niceStep(p.max - p.min);
       input = el('input', { type: 'range', id, name: p.name, min: p.min, max: p.max, step });
     }
     input.dataset.index = i;
@@ -170,11 +171,15 @@ export class Editor extends EventTarget {
       this.schedule(performance.now());
     });
     input.addEventListener('change', () => {
+      // A keyboard step fires input then change with the same value: one regeneration only.
+      const v = read();
       if (!gesture) this.remember();
       gesture = false;
-      this.params[i] = read();
-      show();
-      this.schedule(performance.now());
+      if (v !== this.params[i]) {
+        this.params[i] = v;
+        show();
+        this.schedule(performance.now());
+      }
       this.emitChange();
     });
     this.inputs[i] = { input, show, p };
@@ -211,15 +216,22 @@ export class Editor extends EventTarget {
     this.reframe = false;
     const request = { generator: this.spec.name, params: this.params.slice(), lod: this.lod };
     try {
+      const t0 = performance.now();
       const { glb, ms } = await this.client.call(REQUESTS.GENERATE_GLB, request);
+      const t1 = performance.now();
       // Keep a copy: GLTFLoader may hold on to the buffer, and the download must be these bytes.
       this.glb = { bytes: new Uint8Array(glb.slice(0)), ...request };
       const info = await this.viewer.load(glb, { reframe });
+      const t2 = performance.now();
       const shownAt = await this.viewer.nextFrame();
       const latency = since === null ? null : shownAt - since;
       if (latency !== null) {
+        // Where the time went: waiting for the pump, the worker (generate + GLB), the message
+        // round trip, GLTFLoader, and the wait for the next frame.
         this.latencies.push(latency);
+        this.timings.push({ lod: request.lod, latency, queued: t0 - since, worker: ms, trip: t1 - t0 - ms, parse: t2 - t1, frame: shownAt - t2 });
         if (this.latencies.length > 100) this.latencies.shift();
+        if (this.timings.length > 100) this.timings.shift();
       }
       this.dispatchEvent(
         new CustomEvent('generated', { detail: { ...info, workerMs: ms, latency, bytes: this.glb.bytes.length } }),
@@ -238,6 +250,16 @@ export class Editor extends EventTarget {
     if (!this.busy && !this.dirty) return Promise.resolve();
     return new Promise((resolve) => this.addEventListener('idle', () => resolve(), { once: true }));
   }
+}
+
+/** A decimal step near span/1000 (1, 2 or 5 × 10^k), so slider values stay short decimals. */
+function niceStep(span) {
+  const raw = span / 1000;
+  const k = Math.pow(10, Math.floor(Math.log10(raw)));
+  const m = raw / k;
+  const step = (m < 2 ? 1 : m < 5 ? 2 : 5) * k;
+  // Round away binary noise such as 0.00020000000000000001.
+  return Number(step.toPrecision(1));
 }
 
 function formatValue(v, p) {

@@ -1,0 +1,63 @@
+// The page's benchmark (printed, not asserted): time to interactive, and slider → new frame
+// latency at each level of detail, in headless Chromium on this machine. Latency is measured by
+// the page itself (Editor.timings): from the slider's input event to the requestAnimationFrame
+// in which the new GLB is drawn, split into queueing, worker (generate + GLB export), message
+// round trip, GLTFLoader parse and the wait for the frame.
+//
+// Usage (after `make wasm`): node tests/e2e/bench.mjs   (or `make bench-page`)
+import { startServer, launchBrowser, openPage } from './harness.mjs';
+
+const MOVES = 15;
+const median = (xs) => {
+  const s = [...xs].sort((a, b) => a - b);
+  return s.length ? (s.length % 2 ? s[(s.length - 1) / 2] : (s[s.length / 2 - 1] + s[s.length / 2]) / 2) : NaN;
+};
+
+const server = await startServer();
+const browser = await launchBrowser();
+try {
+  const rows = [];
+  const ttis = [];
+  for (let run = 0; run < 3; run += 1) {
+    const { page } = await openPage(browser.context, server.url);
+    await page.waitForSelector('body[data-ready="true"]', { timeout: 120000 });
+    await page.evaluate(() => window.procfit.editor.settled());
+    // From navigation start to the first model frame on screen.
+    ttis.push(await page.evaluate(() => performance.now()));
+    if (run < 2) {
+      await page.close();
+      continue;
+    }
+    for (const [lod, name] of [[0, 'LOW'], [1, 'MEDIUM'], [2, 'HIGH'], [3, 'ULTRA']]) {
+      await page.selectOption('#lod', String(lod));
+      await page.evaluate(() => window.procfit.editor.settled());
+      await page.evaluate(() => (window.procfit.editor.timings.length = 0));
+      // The slider's input events are dispatched in the page, as a drag delivers them:
+      // Playwright's keyboard goes through the DevTools protocol, which holds the page's main
+      // thread for ~70 ms a key press and would measure itself, not the page.
+      await page.evaluate(async (moves) => {
+        const input = document.getElementById('param-y_scale');
+        for (let i = 0; i < moves; i += 1) {
+          input.value = String(0.5 + (i % 2) * 0.1);
+          input.dispatchEvent(new Event('input', { bubbles: true }));
+          await window.procfit.editor.settled();
+          // A pause, as between a person's slider moves; lets the page go idle.
+          await new Promise((r) => setTimeout(r, 60));
+        }
+      }, MOVES);
+      const t = await page.evaluate(() => window.procfit.editor.timings.slice());
+      const tris = (await page.textContent('#viewer-info')).match(/([\d,]+) triangles/)[1];
+      const m = (k) => median(t.map((x) => x[k])).toFixed(1);
+      rows.push(`| ${name} | ${tris} | ${t.length} | **${m('latency')}** | ${m('queued')} | ${m('worker')} | ${m('trip')} | ${m('parse')} | ${m('frame')} |`);
+    }
+    await page.close();
+  }
+  console.log(`\nTime to interactive (navigation → first model frame), median of ${ttis.length}: ${median(ttis).toFixed(0)} ms\n`);
+  console.log('Slider → new frame latency, medians in ms (headless Chromium, SwiftShader WebGL):\n');
+  console.log('| detail | triangles | moves | latency | queued | worker | round trip | parse | frame |');
+  console.log('|---|---:|---:|---:|---:|---:|---:|---:|---:|');
+  for (const r of rows) console.log(r);
+} finally {
+  await browser.close();
+  server.stop();
+}

@@ -1,0 +1,295 @@
+// The page as a person uses it, in a real browser: open it, try a sample, see the model, move a
+// slider, undo, change the detail, download the GLB (checked by the Khronos validator) and the
+// params JSON, open them again; add photos by picker, drop, paste and the (fake) camera; a bad
+// file gives a message and the page stays usable; nothing is requested outside the origin.
+// Screenshots of each step land in test-artifacts/.
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { readFileSync } from 'node:fs';
+import { join } from 'node:path';
+import validator from 'gltf-validator';
+import { startServer, launchBrowser, openPage, screenshot, writeArtifact, ROOT } from './harness.mjs';
+
+let server;
+let browser;
+let page;
+let log;
+
+before(async () => {
+  server = await startServer();
+  browser = await launchBrowser();
+  ({ page, log } = await openPage(browser.context, server.url));
+  await page.waitForSelector('body[data-ready="true"]', { timeout: 90000 });
+  await settled();
+});
+
+after(async () => {
+  await browser?.close();
+  server?.stop();
+});
+
+/** Waits until every scheduled model change is on screen. */
+const settled = () => page.evaluate(() => window.procfit.editor.settled());
+
+/**
+ * A 32×24 grey-level fingerprint of the 3D view (read back from the WebGL canvas) and how many
+ * distinct grey levels it has: enough to tell a blank canvas from a model, and one model from
+ * another.
+ */
+function viewFingerprint() {
+  return page.evaluate(() => {
+    const src = document.getElementById('viewer');
+    const c = new OffscreenCanvas(32, 24);
+    const ctx = c.getContext('2d');
+    ctx.drawImage(src, 0, 0, 32, 24);
+    const px = ctx.getImageData(0, 0, 32, 24).data;
+    const grey = [];
+    for (let i = 0; i < px.length; i += 4) grey.push(Math.round((px[i] + px[i + 1] + px[i + 2]) / 3));
+    return { grey, levels: new Set(grey).size };
+  });
+}
+
+const meanAbsDiff = (a, b) => a.grey.reduce((s, v, i) => s + Math.abs(v - b.grey[i]), 0) / a.grey.length;
+
+async function validate(bytes) {
+  const report = await validator.validateBytes(new Uint8Array(bytes), {
+    uri: 'download.glb',
+    externalResourceFunction: (uri) => Promise.reject(new Error(`external resource ${uri}`)),
+  });
+  return report.issues;
+}
+
+async function downloadOf(selector) {
+  const [dl] = await Promise.all([page.waitForEvent('download'), page.click(selector)]);
+  return { name: dl.suggestedFilename(), bytes: readFileSync(await dl.path()) };
+}
+
+const messageOf = (id) => page.evaluate((id) => {
+  const m = document.getElementById(id);
+  return m.hidden ? '' : m.textContent;
+}, id);
+
+test('opening the page shows the model editor with a model in the 3D view', async () => {
+  const fp = await viewFingerprint();
+  assert.ok(fp.levels > 20, `the 3D view looks blank (${fp.levels} grey levels)`);
+  assert.match(await page.textContent('#viewer-info'), /2 parts · [\d,]+ triangles/);
+  await screenshot(page, '01-open');
+});
+
+test('a sample puts its photo in step 1 and picks its generator', async () => {
+  await page.click('button[data-sample="mug"]');
+  await page.waitForSelector('#photo-view:not([hidden])');
+  assert.match(await page.textContent('#photo-caption'), /mug\.jpg — 640×480 px/);
+  assert.equal(await page.isChecked('#gen-dish'), true);
+  await settled();
+  await screenshot(page, '02-sample');
+});
+
+test('a slider moved from the keyboard changes the mesh, the view and the GLB; undo/redo restore it', async () => {
+  const before = await viewFingerprint();
+  const glbBefore = await page.evaluate(() => window.procfit.editor.glb.bytes.length);
+  const heightBefore = await page.evaluate(() => window.procfit.editor.params[9]);
+  await page.focus('#param-y_scale');
+  await page.keyboard.press('Home');
+  await settled();
+  const heightAfter = await page.evaluate(() => window.procfit.editor.params[9]);
+  assert.equal(heightAfter, 0.1, 'Home should take the height slider to its minimum');
+  const after = await viewFingerprint();
+  const diff = meanAbsDiff(before, after);
+  assert.ok(diff > 2, `the 3D view barely changed (mean grey difference ${diff.toFixed(2)})`);
+  const info = await page.evaluate(() => ({
+    glb: window.procfit.editor.glb,
+    latency: window.procfit.editor.latencies.at(-1),
+    timing: window.procfit.editor.timings.at(-1),
+  }));
+  console.log(`# timing ${JSON.stringify(info.timing)}`);
+  assert.equal(info.glb.params[9], 0.1, 'the GLB shown is not the one for the new params');
+  assert.ok(info.latency > 0, 'no slider-to-frame latency was measured');
+  console.log(`# slider → new frame: ${info.latency.toFixed(1)} ms incl. the DevTools key dispatch (MEDIUM, ${glbBefore} → ${info.glb.bytes.length} bytes)`);
+  await screenshot(page, '03-slider');
+
+  await page.click('#undo');
+  await settled();
+  assert.equal(await page.evaluate(() => window.procfit.editor.params[9]), heightBefore);
+  assert.ok(Math.abs(Number(await page.inputValue('#param-y_scale')) - heightBefore) < 1e-9, 'the slider did not follow undo');
+  await page.keyboard.press('Control+Shift+Z');
+  await settled();
+  assert.equal(await page.evaluate(() => window.procfit.editor.params[9]), 0.1);
+  await page.click('#reset');
+  await settled();
+  assert.equal(await page.evaluate(() => window.procfit.editor.params[9]), heightBefore);
+});
+
+test('the detail selector changes the triangle count', async () => {
+  const tris = async () => Number((await page.textContent('#viewer-info')).match(/([\d,]+) triangles/)[1].replace(/,/g, ''));
+  const medium = await tris();
+  await page.selectOption('#lod', '0');
+  await settled();
+  const low = await tris();
+  await page.selectOption('#lod', '2');
+  await settled();
+  const high = await tris();
+  assert.ok(low < medium && medium < high, `triangles low ${low}, medium ${medium}, high ${high}`);
+});
+
+test('wireframe and colour-by-part change the view and show a legend', async () => {
+  const plain = await viewFingerprint();
+  await page.check('#wireframe');
+  await page.check('#part-colors');
+  await page.evaluate(() => window.procfit.viewer.nextFrame());
+  const styled = await viewFingerprint();
+  assert.ok(meanAbsDiff(plain, styled) > 2, 'wireframe + part colours did not change the view');
+  assert.deepEqual(await page.$$eval('#legend .swatch', (s) => s.map((x) => x.textContent)), ['body', 'handle']);
+  await screenshot(page, '04-wireframe-parts');
+  await page.uncheck('#wireframe');
+  await page.uncheck('#part-colors');
+});
+
+test('the downloaded GLB is the model shown, passes the glTF validator and opens again', async () => {
+  await page.focus('#param-handle_center_y');
+  await page.keyboard.press('End');
+  await settled();
+  const shown = await page.evaluate(() => {
+    const g = window.procfit.editor.glb;
+    return { params: g.params, lod: g.lod, bytes: Array.from(g.bytes) };
+  });
+  const glb = await downloadOf('#download-glb');
+  assert.match(glb.name, /^dish-.*\.glb$/);
+  assert.deepEqual(Array.from(glb.bytes), shown.bytes, 'the download is not the GLB in the view');
+  const issues = await validate(glb.bytes);
+  writeArtifact('download.glb', glb.bytes);
+  assert.equal(issues.numErrors, 0, JSON.stringify(issues.messages.slice(0, 5)));
+  console.log(`# downloaded GLB: ${glb.bytes.length} bytes, validator: ${issues.numErrors} errors, ${issues.numWarnings} warnings`);
+
+  const json = await downloadOf('#download-json');
+  assert.match(json.name, /\.json$/);
+  const doc = JSON.parse(json.bytes.toString('utf8'));
+  assert.equal(doc.generator, 'dish');
+  assert.equal(doc.params.handle_center_y, 0.7);
+
+  // Change the model, then open the saved GLB: the editor comes back to the saved state.
+  await page.selectOption('#preset', 'bowl');
+  await settled();
+  await page.setInputFiles('#open-model', { name: 'saved.glb', mimeType: 'model/gltf-binary', buffer: glb.bytes });
+  await settled();
+  assert.deepEqual(await page.evaluate(() => window.procfit.editor.params), shown.params);
+  assert.match(await messageOf('out-message'), /Opened “saved\.glb”/);
+
+  // And the JSON, after another change.
+  await page.selectOption('#preset', 'vase');
+  await settled();
+  await page.setInputFiles('#open-model', { name: 'saved.json', mimeType: 'application/json', buffer: json.bytes });
+  await settled();
+  assert.deepEqual(await page.evaluate(() => window.procfit.editor.params), shown.params);
+});
+
+test('files that are not procfit models are refused with a message', async () => {
+  const check = async (name, mimeType, text, pattern) => {
+    await page.setInputFiles('#open-model', { name, mimeType, buffer: Buffer.from(text) });
+    await page.waitForFunction(() => !document.getElementById('out-message').hidden && /Could not/.test(document.getElementById('out-message').textContent));
+    assert.match(await messageOf('out-message'), pattern);
+  };
+  await check('other.json', 'application/json', '{"hello": 1}', /Could not open “other\.json”/);
+  await check('bad.glb', 'model/gltf-binary', 'glTF-but-not-really', /Could not open “bad\.glb”: (malformed|unsupported)/);
+  await check('unknown.json', 'application/json', '{"generator":"teapot","version":1,"params":{}}', /unknown generator `teapot`/);
+});
+
+test('a photo by the file picker, a bad file, a drop and a paste', async () => {
+  const mug = readFileSync(join(ROOT, 'www', 'samples', 'mug.jpg'));
+  const count = () => page.$$eval('#thumbs li', (l) => l.length);
+  const n0 = await count();
+  await page.setInputFiles('#file', { name: 'my cup.jpg', mimeType: 'image/jpeg', buffer: mug });
+  await page.waitForFunction((n) => document.querySelectorAll('#thumbs li').length === n + 1, n0);
+
+  await page.setInputFiles('#file', { name: 'notes.txt', mimeType: 'text/plain', buffer: Buffer.from('not a photo') });
+  await page.waitForSelector('#photos-message:not([hidden])');
+  assert.match(await messageOf('photos-message'), /“notes\.txt” is not a photo/);
+  await page.setInputFiles('#file', { name: 'broken.jpg', mimeType: 'image/jpeg', buffer: Buffer.from('not really a jpeg') });
+  await page.waitForFunction(() => /could not be read as an image/.test(document.getElementById('photos-message').textContent));
+  await screenshot(page, '05-bad-file');
+  assert.equal(await count(), n0 + 1, 'a bad file was added as a photo');
+
+  // Drop onto the page (anywhere) and paste: a second and third view.
+  const b64 = mug.toString('base64');
+  await page.evaluate(async (b64) => {
+    const bytes = Uint8Array.from(atob(b64), (c) => c.charCodeAt(0));
+    const file = new File([bytes], 'dropped.jpg', { type: 'image/jpeg' });
+    const dt = new DataTransfer();
+    dt.items.add(file);
+    document.querySelector('footer').dispatchEvent(new DragEvent('drop', { dataTransfer: dt, bubbles: true, cancelable: true }));
+  }, b64);
+  await page.waitForFunction((n) => document.querySelectorAll('#thumbs li').length === n + 2, n0);
+  await page.evaluate(async (b64) => {
+    const bytes = Uint8Array.from(atob(b64), (c) => c.charCodeAt(0));
+    const dt = new DataTransfer();
+    dt.items.add(new File([bytes], 'image.png', { type: 'image/jpeg' }));
+    document.body.dispatchEvent(new ClipboardEvent('paste', { clipboardData: dt, bubbles: true, cancelable: true }));
+  }, b64);
+  await page.waitForFunction((n) => document.querySelectorAll('#thumbs li').length === n + 3, n0);
+  assert.match(await page.textContent('#photo-caption'), /photo \d+ of \d+/);
+  assert.equal(await messageOf('photos-message'), '', 'a good photo should clear the old message');
+
+  // Remove one: the list shrinks and the page still works.
+  await page.click('#thumbs li:last-child .remove');
+  assert.equal(await count(), n0 + 2);
+  await screenshot(page, '06-photos');
+});
+
+test('the camera (fake device) takes several shots', async () => {
+  const n0 = await page.$$eval('#thumbs li', (l) => l.length);
+  await page.click('#camera-open');
+  await page.waitForSelector('dialog#camera[open]');
+  await page.waitForFunction(() => document.querySelector('dialog#camera video').videoWidth > 0);
+  await screenshot(page, '07-camera');
+  await page.click('#camera-shoot');
+  await page.click('#camera-shoot');
+  await page.waitForFunction(() => /2 shots taken/.test(document.querySelector('dialog#camera [role=status]').textContent));
+  await page.click('#camera-done');
+  await page.waitForFunction((n) => document.querySelectorAll('#thumbs li').length === n + 2, n0);
+  assert.equal(await page.evaluate(() => document.querySelector('dialog#camera').open), false);
+  // The camera is released when the dialog closes.
+  assert.equal(await page.evaluate(() => document.querySelector('dialog#camera video').srcObject?.active ?? false), false);
+});
+
+test('every control is reachable by keyboard and has a label', async () => {
+  const unlabeled = await page.evaluate(() =>
+    [...document.querySelectorAll('input, select, button, canvas[tabindex]')]
+      .filter((e) => !e.closest('[hidden]') && !e.closest('dialog:not([open])'))
+      .filter((e) => {
+        const name = e.getAttribute('aria-label') || (e.labels && [...e.labels].map((l) => l.textContent).join('')) || e.textContent;
+        return !name || !name.trim();
+      })
+      .map((e) => e.outerHTML.slice(0, 80)),
+  );
+  assert.deepEqual(unlabeled, []);
+  // Tab from the top reaches the file picker, the camera, the generator, the viewer and download.
+  await page.focus('a.skip');
+  const seen = new Set();
+  for (let i = 0; i < 80; i += 1) {
+    await page.keyboard.press('Tab');
+    seen.add(await page.evaluate(() => document.activeElement?.id || ''));
+  }
+  for (const id of ['file', 'camera-open', 'gen-dish', 'preset', 'viewer', 'wireframe', 'lod']) {
+    assert.ok(seen.has(id), `Tab never reached #${id}: ${[...seen].join(', ')}`);
+  }
+});
+
+test('on a phone in portrait the page fits the width', async () => {
+  const phone = await browser.context.newPage();
+  await phone.setViewportSize({ width: 390, height: 844 });
+  await phone.goto(server.url);
+  await phone.waitForSelector('body[data-ready="true"]', { timeout: 90000 });
+  await phone.evaluate(() => window.procfit.editor.settled());
+  const overflow = await phone.evaluate(() => document.documentElement.scrollWidth - window.innerWidth);
+  assert.ok(overflow <= 0, `the page is ${overflow}px wider than the phone`);
+  await screenshot(phone, '08-phone');
+  await phone.close();
+});
+
+test('no console errors, no page errors, no request outside the origin', () => {
+  assert.deepEqual(log.pageErrors, []);
+  assert.deepEqual(log.consoleErrors, []);
+  const origin = new URL(server.url).origin;
+  const outside = log.requests.filter((u) => !u.startsWith(origin) && !u.startsWith('data:') && !u.startsWith('blob:'));
+  assert.deepEqual(outside, []);
+});
