@@ -171,7 +171,7 @@ test('the downloaded GLB is the model shown, passes the glTF validator and opens
   await page.selectOption('#preset', 'bowl');
   await settled();
   await page.setInputFiles('#open-model', { name: 'saved.glb', mimeType: 'model/gltf-binary', buffer: glb.bytes });
-  await settled();
+  await openedMessage('saved.glb');
   assert.deepEqual(await page.evaluate(() => window.procfit.editor.params), shown.params);
   assert.match(await messageOf('out-message'), /Opened “saved\.glb”/);
 
@@ -179,14 +179,20 @@ test('the downloaded GLB is the model shown, passes the glTF validator and opens
   await page.selectOption('#preset', 'vase');
   await settled();
   await page.setInputFiles('#open-model', { name: 'saved.json', mimeType: 'application/json', buffer: json.bytes });
-  await settled();
+  await openedMessage('saved.json');
   assert.deepEqual(await page.evaluate(() => window.procfit.editor.params), shown.params);
 });
+
+/** Waits for the page to say it opened `name`, then for the model to be on screen. */
+async function openedMessage(name) {
+  await page.waitForFunction((n) => document.getElementById('out-message').textContent.includes(`Opened “${n}”`), name);
+  await settled();
+}
 
 test('files that are not procfit models are refused with a message', async () => {
   const check = async (name, mimeType, text, pattern) => {
     await page.setInputFiles('#open-model', { name, mimeType, buffer: Buffer.from(text) });
-    await page.waitForFunction(() => !document.getElementById('out-message').hidden && /Could not/.test(document.getElementById('out-message').textContent));
+    await page.waitForFunction((n) => document.getElementById('out-message').textContent.includes(`Could not open “${n}”`), name);
     assert.match(await messageOf('out-message'), pattern);
   };
   await check('other.json', 'application/json', '{"hello": 1}', /Could not open “other\.json”/);
