@@ -66,6 +66,67 @@ impl<S: Scalar> Builder<S> {
         self.tri([q[0], q[2], q[3]], [uv[0], uv[2], uv[3]], part, group);
     }
 
+    /// Adds a closed convex polyhedron: `corners` are its vertices, `faces` its planar faces as
+    /// corner-index loops, counter-clockwise seen from outside. Faces are fan-triangulated,
+    /// flat-shaded, and get planar UVs in the mesh's units (metres for buildings): u along the
+    /// face's first edge, v across it.
+    pub fn polyhedron(&mut self, corners: &[P3<S>], faces: &[&[usize]], part: u8) {
+        let first = self.pos.len() as u32;
+        for &c in corners {
+            self.vertex(c);
+        }
+        let val = |i: usize| {
+            DVec3::new(
+                corners[i][0].val(),
+                corners[i][1].val(),
+                corners[i][2].val(),
+            )
+        };
+        for face in faces {
+            let o = val(face[0]);
+            let t = (val(face[1]) - o).normalize_or_zero();
+            let n = (val(face[1]) - o).cross(val(face[2]) - o);
+            let bt = n.cross(t).normalize_or_zero();
+            let uv = |i: usize| {
+                let d = val(i) - o;
+                Vec2::new(d.dot(t) as f32, d.dot(bt) as f32)
+            };
+            for k in 1..face.len() - 1 {
+                let (a, b, c) = (face[0], face[k], face[k + 1]);
+                self.tri(
+                    [first + a as u32, first + b as u32, first + c as u32],
+                    [uv(a), uv(b), uv(c)],
+                    part,
+                    0,
+                );
+            }
+        }
+    }
+
+    /// Adds an axis-aligned box from `lo` to `hi` (every component of `hi` above `lo`).
+    pub fn cuboid(&mut self, lo: P3<S>, hi: P3<S>, part: u8) {
+        // Corner (i, j, k) picks lo/hi in x, y, z; index 4i + 2j + k.
+        let corners: [P3<S>; 8] = std::array::from_fn(|n| {
+            let pick = |bit: usize, axis: usize| {
+                if n >> bit & 1 == 1 {
+                    hi[axis]
+                } else {
+                    lo[axis]
+                }
+            };
+            [pick(2, 0), pick(1, 1), pick(0, 2)]
+        });
+        const FACES: [&[usize]; 6] = [
+            &[0, 1, 3, 2], // −X
+            &[4, 6, 7, 5], // +X
+            &[0, 4, 5, 1], // −Y
+            &[2, 3, 7, 6], // +Y
+            &[0, 2, 6, 4], // −Z
+            &[1, 5, 7, 3], // +Z
+        ];
+        self.polyhedron(&corners, &FACES, part);
+    }
+
     /// The finished mesh (normals computed here) and the scalar positions.
     pub fn finish(self, parts: &[Part]) -> Result<(Mesh, Vec<P3<S>>), GenError> {
         let p64: Vec<DVec3> = self

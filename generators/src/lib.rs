@@ -18,6 +18,7 @@ use std::fmt;
 
 pub mod ad;
 pub mod build;
+pub mod building;
 pub mod dish;
 
 /// Level of detail, from the coarse mesh used during the fit to the export mesh.
@@ -304,7 +305,7 @@ pub trait Generator: Send + Sync {
 
 /// Every generator procfit knows, in the order the page lists them.
 pub fn all() -> Vec<&'static dyn Generator> {
-    vec![&dish::Dish]
+    vec![&dish::Dish, &building::Building]
 }
 
 /// The generator with this machine name.
