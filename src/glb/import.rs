@@ -237,6 +237,28 @@ fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), GlbError> {
 /// Runs gltf-json's index and enum validation and reports the first few problems.
 fn validate(root: &json::Root) -> Result<(), GlbError> {
     use json::validation::Validate;
+    if let Some(ext) = root.extensions_required.first() {
+        return Err(GlbError::Unsupported(format!(
+            "the file requires extension {ext}, which procfit does not read (re-export it without compression or quantization)"
+        )));
+    }
+    // gltf-json 1.4.1's primitive validation indexes `accessors[POSITION]` without a bounds
+    // check and panics on a dangling index, so that index is checked first.
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let position = primitive
+                .attributes
+                .get(&Valid(json::mesh::Semantic::Positions));
+            if let Some(a) = position
+                && a.value() >= root.accessors.len()
+            {
+                return malformed(format!(
+                    "invalid glTF: mesh {m} primitive {p}: POSITION accessor {} does not exist",
+                    a.value()
+                ));
+            }
+        }
+    }
     let mut errors = Vec::new();
     root.validate(root, json::Path::new, &mut |path, error| {
         if errors.len() < 5 {
