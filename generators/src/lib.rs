@@ -16,6 +16,10 @@
 use glam::{Vec2, Vec3};
 use std::fmt;
 
+pub mod ad;
+pub mod build;
+pub mod dish;
+
 /// Level of detail, from the coarse mesh used during the fit to the export mesh.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Lod {
@@ -281,6 +285,12 @@ pub trait Generator: Send + Sync {
         (0.0, vec![0.0; params.len()])
     }
 
+    /// The initial population the memetic optimiser starts from (paper §3.2: presets are
+    /// concatenated into the initial population). Defaults to the presets' values.
+    fn seeds(&self) -> Vec<Vec<f64>> {
+        self.presets().into_iter().map(|p| p.values).collect()
+    }
+
     /// Default parameter vector.
     fn defaults(&self) -> Vec<f64> {
         self.params().iter().map(|p| p.default).collect()
@@ -294,7 +304,7 @@ pub trait Generator: Send + Sync {
 
 /// Every generator procfit knows, in the order the page lists them.
 pub fn all() -> Vec<&'static dyn Generator> {
-    vec![]
+    vec![&dish::Dish]
 }
 
 /// The generator with this machine name.

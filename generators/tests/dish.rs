@@ -1,0 +1,456 @@
+//! Tests of the dish generator: gradients against finite differences, mesh validity, golden
+//! summaries per preset × level of detail, random parameter vectors, bad input.
+
+mod common;
+
+use common::{Rng, check_gradient, random_params, validate};
+use procfit_generators::dish::{self, Dish};
+use procfit_generators::{GenError, Generator, Lod};
+
+#[test]
+fn vjp_matches_finite_differences_for_every_preset_at_two_lods() {
+    let n_handle = 2 + 2 * dish::HANDLE_STEPS;
+    for preset in Dish.presets() {
+        for lod in [Lod::Low, Lod::Medium] {
+            let what = format!("{} {lod:?}", preset.name);
+            let moving = check_gradient(&Dish, &preset.values, lod, &what);
+            // Every body parameter moves the mesh; with a handle, every handle parameter too.
+            let has_handle = preset.values[dish::P_HAS_HANDLE] > 0.5;
+            let expected = 10 + if has_handle { n_handle } else { 0 };
+            assert_eq!(moving, expected, "{what}: parameters that move the mesh");
+        }
+    }
+}
+
+#[test]
+fn every_preset_and_lod_gives_a_valid_mesh() {
+    for preset in Dish.presets() {
+        for lod in Lod::ALL {
+            let m = Dish.generate(&preset.values, lod).expect("generate");
+            if let Err(e) = validate(&m) {
+                panic!("{} {lod:?}: {e}", preset.name);
+            }
+            let has_handle = preset.values[dish::P_HAS_HANDLE] > 0.5;
+            assert_eq!(m.tri_parts.contains(&1), has_handle, "{}", preset.name);
+        }
+    }
+}
+
+#[test]
+fn random_in_range_parameters_give_valid_meshes() {
+    let mut rng = Rng(2024);
+    for case in 0..300 {
+        let p = random_params(&Dish, &mut rng);
+        let lod = if case % 10 == 0 {
+            Lod::Medium
+        } else {
+            Lod::Low
+        };
+        let m = Dish.generate(&p, lod).expect("generate");
+        if let Err(e) = validate(&m) {
+            panic!("case {case} {lod:?} {p:?}: {e}");
+        }
+    }
+}
+
+/// Vertex count, triangle count and bounding box (min, max) of a preset at a level.
+fn check(preset: &str, lod: Lod, verts: usize, tris: usize, lo: [f32; 3], hi: [f32; 3]) {
+    let p = Dish.preset(preset).expect("preset").values;
+    let m = Dish.generate(&p, lod).expect("generate");
+    let (blo, bhi) = m.bounds().expect("bounds");
+    let got = (
+        m.positions.len(),
+        m.triangles.len(),
+        blo.to_array(),
+        bhi.to_array(),
+    );
+    let close = |a: [f32; 3], b: [f32; 3]| a.iter().zip(&b).all(|(x, y)| (x - y).abs() < 1e-4);
+    assert!(
+        got.0 == verts && got.1 == tris && close(got.2, lo) && close(got.3, hi),
+        "{preset} {lod:?}: got {got:?}"
+    );
+}
+
+#[test]
+fn golden_summaries() {
+    // Regenerate only for an intended change of the mesh; a surprise here is a regression.
+    check(
+        "mug",
+        Lod::Low,
+        592,
+        1176,
+        [-0.3603, 0.0000, -0.3603],
+        [0.6740, 0.9125, 0.3603],
+    );
+    check(
+        "mug",
+        Lod::Medium,
+        2140,
+        4272,
+        [-0.3603, 0.0000, -0.3603],
+        [0.6740, 0.9125, 0.3603],
+    );
+    check(
+        "mug",
+        Lod::High,
+        8116,
+        16224,
+        [-0.3603, 0.0000, -0.3603],
+        [0.6740, 0.9125, 0.3603],
+    );
+    check(
+        "mug",
+        Lod::Ultra,
+        31588,
+        63168,
+        [-0.3604, 0.0000, -0.3604],
+        [0.6740, 0.9125, 0.3604],
+    );
+    check(
+        "tea_cup",
+        Lod::Low,
+        592,
+        1176,
+        [-0.4680, 0.0000, -0.4680],
+        [0.6456, 0.6439, 0.4680],
+    );
+    check(
+        "tea_cup",
+        Lod::Medium,
+        2140,
+        4272,
+        [-0.4680, 0.0000, -0.4680],
+        [0.6456, 0.6439, 0.4680],
+    );
+    check(
+        "tea_cup",
+        Lod::High,
+        8116,
+        16224,
+        [-0.4680, 0.0000, -0.4680],
+        [0.6456, 0.6439, 0.4680],
+    );
+    check(
+        "tea_cup",
+        Lod::Ultra,
+        31588,
+        63168,
+        [-0.4681, 0.0000, -0.4681],
+        [0.6456, 0.6440, 0.4681],
+    );
+    check(
+        "bowl",
+        Lod::Low,
+        470,
+        936,
+        [-0.5310, 0.0000, -0.5310],
+        [0.5310, 0.5083, 0.5310],
+    );
+    check(
+        "bowl",
+        Lod::Medium,
+        1898,
+        3792,
+        [-0.5310, 0.0000, -0.5310],
+        [0.5310, 0.5083, 0.5310],
+    );
+    check(
+        "bowl",
+        Lod::High,
+        7634,
+        15264,
+        [-0.5310, 0.0000, -0.5310],
+        [0.5310, 0.5084, 0.5310],
+    );
+    check(
+        "bowl",
+        Lod::Ultra,
+        30626,
+        61248,
+        [-0.5310, 0.0000, -0.5310],
+        [0.5310, 0.5084, 0.5310],
+    );
+    check(
+        "plate",
+        Lod::Low,
+        470,
+        936,
+        [-0.5878, 0.0000, -0.5878],
+        [0.5878, 0.1283, 0.5878],
+    );
+    check(
+        "plate",
+        Lod::Medium,
+        1898,
+        3792,
+        [-0.5900, 0.0000, -0.5900],
+        [0.5900, 0.1305, 0.5900],
+    );
+    check(
+        "plate",
+        Lod::High,
+        7634,
+        15264,
+        [-0.5900, 0.0000, -0.5900],
+        [0.5900, 0.1305, 0.5900],
+    );
+    check(
+        "plate",
+        Lod::Ultra,
+        30626,
+        61248,
+        [-0.5902, 0.0000, -0.5902],
+        [0.5902, 0.1306, 0.5902],
+    );
+    check(
+        "tumbler",
+        Lod::Low,
+        470,
+        936,
+        [-0.2970, 0.0000, -0.2970],
+        [0.2970, 1.0480, 0.2970],
+    );
+    check(
+        "tumbler",
+        Lod::Medium,
+        1898,
+        3792,
+        [-0.2970, 0.0000, -0.2970],
+        [0.2970, 1.0480, 0.2970],
+    );
+    check(
+        "tumbler",
+        Lod::High,
+        7634,
+        15264,
+        [-0.2970, 0.0000, -0.2970],
+        [0.2970, 1.0480, 0.2970],
+    );
+    check(
+        "tumbler",
+        Lod::Ultra,
+        30626,
+        61248,
+        [-0.2970, 0.0000, -0.2970],
+        [0.2970, 1.0480, 0.2970],
+    );
+    check(
+        "vase",
+        Lod::Low,
+        470,
+        936,
+        [-0.4258, 0.0000, -0.4258],
+        [0.4258, 1.1411, 0.4258],
+    );
+    check(
+        "vase",
+        Lod::Medium,
+        1898,
+        3792,
+        [-0.4260, 0.0000, -0.4260],
+        [0.4260, 1.1410, 0.4260],
+    );
+    check(
+        "vase",
+        Lod::High,
+        7634,
+        15264,
+        [-0.4264, 0.0000, -0.4264],
+        [0.4264, 1.1416, 0.4264],
+    );
+    check(
+        "vase",
+        Lod::Ultra,
+        30626,
+        61248,
+        [-0.4264, 0.0000, -0.4264],
+        [0.4264, 1.1415, 0.4264],
+    );
+    check(
+        "mug_ear_handle",
+        Lod::Low,
+        592,
+        1176,
+        [-0.3603, 0.0000, -0.3603],
+        [0.6798, 0.9125, 0.3603],
+    );
+    check(
+        "mug_ear_handle",
+        Lod::Medium,
+        2140,
+        4272,
+        [-0.3603, 0.0000, -0.3603],
+        [0.6798, 0.9125, 0.3603],
+    );
+    check(
+        "mug_ear_handle",
+        Lod::High,
+        8116,
+        16224,
+        [-0.3603, 0.0000, -0.3603],
+        [0.6798, 0.9125, 0.3603],
+    );
+    check(
+        "mug_ear_handle",
+        Lod::Ultra,
+        31588,
+        63168,
+        [-0.3604, 0.0000, -0.3604],
+        [0.6798, 0.9125, 0.3604],
+    );
+    check(
+        "mug_square_handle",
+        Lod::Low,
+        592,
+        1176,
+        [-0.3603, 0.0000, -0.3603],
+        [0.6341, 0.9125, 0.3603],
+    );
+    check(
+        "mug_square_handle",
+        Lod::Medium,
+        2140,
+        4272,
+        [-0.3603, 0.0000, -0.3603],
+        [0.6341, 0.9125, 0.3603],
+    );
+    check(
+        "mug_square_handle",
+        Lod::High,
+        8116,
+        16224,
+        [-0.3603, 0.0000, -0.3603],
+        [0.6341, 0.9125, 0.3603],
+    );
+    check(
+        "mug_square_handle",
+        Lod::Ultra,
+        31588,
+        63168,
+        [-0.3604, 0.0000, -0.3604],
+        [0.6341, 0.9125, 0.3604],
+    );
+    check(
+        "mug_small_handle",
+        Lod::Low,
+        592,
+        1176,
+        [-0.3603, 0.0000, -0.3603],
+        [0.5424, 0.9125, 0.3603],
+    );
+    check(
+        "mug_small_handle",
+        Lod::Medium,
+        2140,
+        4272,
+        [-0.3603, 0.0000, -0.3603],
+        [0.5424, 0.9125, 0.3603],
+    );
+    check(
+        "mug_small_handle",
+        Lod::High,
+        8116,
+        16224,
+        [-0.3603, 0.0000, -0.3603],
+        [0.5424, 0.9125, 0.3603],
+    );
+    check(
+        "mug_small_handle",
+        Lod::Ultra,
+        31588,
+        63168,
+        [-0.3604, 0.0000, -0.3604],
+        [0.5424, 0.9125, 0.3604],
+    );
+}
+
+#[test]
+fn bad_input_is_an_error_not_a_panic() {
+    let mut p = Dish.defaults();
+    assert_eq!(
+        Dish.generate(&p[..5], Lod::Low).err(),
+        Some(GenError::WrongLength {
+            expected: 53,
+            got: 5
+        })
+    );
+    p[3] = f64::NAN;
+    assert!(matches!(
+        Dish.generate(&p, Lod::Low),
+        Err(GenError::NotFinite { .. })
+    ));
+    p[3] = f64::INFINITY;
+    assert!(Dish.generate_with_vjp(&p, Lod::Low).is_err());
+    // Out of range is clamped: the same mesh as the range end.
+    let mut big = Dish.defaults();
+    big[dish::P_Y_SCALE] = 1e9;
+    let mut end = Dish.defaults();
+    end[dish::P_Y_SCALE] = 1.25;
+    assert_eq!(Dish.generate(&big, Lod::Low), Dish.generate(&end, Lod::Low));
+    // A wrong adjoint length is an error.
+    let (_, vjp) = Dish.generate_with_vjp(&end, Lod::Low).expect("vjp");
+    let mut g = vec![0.0; 53];
+    assert!(vjp.vjp(&[glam::Vec3::ZERO; 3], &mut g).is_err());
+}
+
+#[test]
+fn seeds_are_bodies_times_handles_plus_handleless() {
+    let seeds = Dish.seeds();
+    assert_eq!(seeds.len(), 6 * 4 + 6);
+    let with_handle = seeds.iter().filter(|s| s[dish::P_HAS_HANDLE] > 0.5).count();
+    assert_eq!(with_handle, 24);
+    for s in &seeds {
+        assert_eq!(
+            procfit_generators::sanitize_params(Dish.params(), s).as_ref(),
+            Ok(s)
+        );
+    }
+}
+
+#[test]
+fn regularizer_gradient_matches_finite_differences() {
+    let mut rng = Rng(11);
+    for _ in 0..20 {
+        let mut p = random_params(&Dish, &mut rng);
+        p[dish::P_HAS_HANDLE] = 1.0;
+        let (v, g) = Dish.regularizer(&p);
+        assert!(v >= 0.0);
+        for (i, s) in Dish.params().iter().enumerate() {
+            if !s.kind.is_continuous() {
+                continue;
+            }
+            let h = 1e-6;
+            let mut a = p.clone();
+            let mut b = p.clone();
+            a[i] += h;
+            b[i] -= h;
+            if a[i] > s.max || b[i] < s.min {
+                continue;
+            }
+            let fd = (Dish.regularizer(&a).0 - Dish.regularizer(&b).0) / (2.0 * h);
+            assert!(
+                (fd - g[i]).abs() < 1e-5 * (1.0 + fd.abs()),
+                "{}: {fd} vs {}",
+                s.name,
+                g[i]
+            );
+        }
+    }
+    // The penalties fire where the notes say: a narrowing profile, a rim > 3× the base, a
+    // jumpy handle. A straight mug with a smooth handle costs nothing.
+    let mug = Dish.preset("mug").expect("mug").values;
+    let (base, _) = Dish.regularizer(&mug);
+    let mut narrowing = mug.clone();
+    narrowing[dish::P_RADIUS + 8] = 2.0;
+    let mut flared = mug.clone();
+    flared[dish::P_RADIUS] = 1.0;
+    let mut jumpy = mug.clone();
+    jumpy[dish::P_SWEEP + 5] = 0.5;
+    for (what, p) in [
+        ("narrowing", narrowing),
+        ("flared", flared),
+        ("jumpy", jumpy),
+    ] {
+        assert!(Dish.regularizer(&p).0 > base + 0.01, "{what}");
+    }
+}

@@ -1,0 +1,89 @@
+//! Writes a GLB for every built-in generator's presets × levels of detail (plus the test prism
+//! with cameras and a mesh that needs u32 indices) and runs the Khronos glTF-Validator on them
+//! through `node tests/gltf_validate.mjs`: 0 errors and 0 warnings required.
+//!
+//! Needs `node` and `npm ci` (for `node_modules/gltf-validator`). Where node is truly absent, set
+//! `PROCFIT_SKIP_NODE=1` to skip the validator run explicitly; otherwise a missing node fails.
+
+mod glb_support;
+
+use glb_support::{Prism, doc_of, strip};
+use procfit::generators::{self, Generator, Lod};
+use procfit::glb::{ExportCamera, export_model, write_glb};
+use procfit::model::Model;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// Writes every GLB under test into `dir` and returns how many.
+fn write_all(dir: &Path) -> usize {
+    let mut n = 0;
+    let mut put = |name: String, bytes: Vec<u8>| {
+        std::fs::write(dir.join(format!("{name}.glb")), bytes).unwrap();
+        n += 1;
+    };
+    for g in generators::all() {
+        for preset in g.presets() {
+            for lod in Lod::ALL {
+                let model = Model::new(g.name(), &preset.values, lod).unwrap();
+                let glb = export_model(&model, &[]).unwrap();
+                put(
+                    format!("{}-{}-lod{}", g.name(), preset.name, lod.index()),
+                    glb,
+                );
+            }
+        }
+    }
+    let cameras = [
+        ExportCamera::look_at(glam::Vec3::new(0.0, 0.5, 2.0), glam::Vec3::ZERO, 0.8, 1.5),
+        ExportCamera::look_at(glam::Vec3::new(0.0, 3.0, 0.0), glam::Vec3::ZERO, 0.6, 1.0),
+    ];
+    for preset in Prism.presets() {
+        for lod in Lod::ALL {
+            let mesh = Prism.generate(&preset.values, lod).unwrap();
+            let doc = doc_of(&Prism, &preset.values, lod, Some(1));
+            let glb = write_glb(&mesh, Some(&doc), &cameras).unwrap();
+            put(
+                format!("test_prism-{}-lod{}", preset.name, lod.index()),
+                glb,
+            );
+        }
+    }
+    // One part of 70 000 vertices: u32 indices.
+    put(
+        "strip-70000".into(),
+        write_glb(&strip(70_000), None, &[]).unwrap(),
+    );
+    n
+}
+
+#[test]
+fn khronos_validator_reports_no_errors_and_no_warnings() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("glb-validate");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let n = write_all(&dir);
+    assert!(n >= 8, "wrote {n} files");
+
+    if std::env::var_os("PROCFIT_SKIP_NODE").is_some() {
+        eprintln!("PROCFIT_SKIP_NODE set: wrote {n} GLBs to {dir:?}, validator not run");
+        return;
+    }
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let out = Command::new("node")
+        .arg(root.join("tests/gltf_validate.mjs"))
+        .arg(&dir)
+        .current_dir(root)
+        .output()
+        .expect("`node` must be installed to run the glTF validator (or set PROCFIT_SKIP_NODE=1)");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    println!("{stdout}");
+    assert!(
+        out.status.success(),
+        "validator failed:\n{stderr}\n{stdout}"
+    );
+    assert!(
+        stdout.contains(&format!("**{n} files**")),
+        "validator did not see all {n} files:\n{stdout}"
+    );
+}
