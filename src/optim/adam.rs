@@ -2,7 +2,8 @@
 //! gradient stages (§3.4) and the memetic algorithm's local search.
 //!
 //! Adam's step is roughly `lr` whatever the gradient's scale, so the learning rate is a length
-//! in parameter units. Each variable gets `lr × (max − min)`: a radius in `[0.1, 8]` and a
+//! in parameter units. Each variable gets `lr × unit`, the unit being `max − min` unless the
+//! domain sets another ([`Var::with_unit`](super::Var::with_unit)): a radius in `[0.1, 8]` and a
 //! thickness in `[0.025, 0.075]` then move the same fraction of their range per step (the
 //! reference schedule: lr ≈ 0.01 at 256², ≈ 0.0075 at 512²). [`Adam::set_rate`] overrides one
 //! variable (the fit does this for camera parameters whose ranges say little about scale).
@@ -19,7 +20,7 @@ use super::{Domain, Individual, Objective, loss_key};
 pub struct AdamConfig {
     /// Evaluations (one gradient each) per run of [`adam_search`].
     pub iterations: usize,
-    /// Step length as a fraction of each variable's range.
+    /// Step length as a fraction of each variable's unit (its range unless set otherwise).
     pub lr: f64,
     /// First-moment decay.
     pub beta1: f64,
@@ -55,8 +56,8 @@ pub struct Adam {
 }
 
 impl Adam {
-    /// A fresh state for `domain`: step `config.lr × range` for continuous variables, 0 for
-    /// discrete ones.
+    /// A fresh state for `domain`: step `config.lr × unit` for continuous variables (the unit is
+    /// the range unless the domain says otherwise), 0 for discrete ones.
     pub fn new(domain: &Domain, config: &AdamConfig) -> Adam {
         let n = domain.len();
         Adam {

@@ -11,7 +11,7 @@
 //!   one unit. A fraction of the children get an Adam local search. Each child replaces the
 //!   worst individual if it is better.
 //! - **Restart**: when the population has collapsed (mean standard deviation per variable, as a
-//!   fraction of its range, below [`MemeticConfig::min_diversity`]), all but the elite are
+//!   fraction of its unit, below [`MemeticConfig::min_diversity`]), all but the elite are
 //!   replaced by strongly mutated copies of the elite and of the seeds, polished again.
 //!
 //! **Determinism.** All random choices are made sequentially from one seeded [`Rng`] before a
@@ -51,7 +51,8 @@ pub struct MemeticConfig {
     pub crossover_rate: f64,
     /// Probability that each gene of a child is mutated.
     pub mutation_rate: f64,
-    /// Standard deviation of a mutation, as a fraction of the variable's range.
+    /// Standard deviation of a mutation, as a fraction of the variable's unit (its range for
+    /// discrete variables).
     pub mutation_sigma: f64,
     /// Fraction of children that get an Adam local search.
     pub local_search_rate: f64,
@@ -259,7 +260,8 @@ impl Memetic {
     fn mutate_gene(&mut self, x: &mut [f64], i: usize, sigma: f64) -> bool {
         let var = self.domain.vars()[i];
         let before = x[i];
-        let step = self.rng.normal() * sigma * var.range();
+        let unit = if var.discrete { var.range() } else { var.unit };
+        let step = self.rng.normal() * sigma * unit;
         x[i] = if var.discrete {
             // A rounded Gaussian step of at least one unit, so a discrete mutation always does
             // something (bounces off the end of the range).
@@ -292,7 +294,8 @@ impl Memetic {
         best
     }
 
-    /// Mean over variables of the population's standard deviation divided by the range.
+    /// Mean over variables of the population's standard deviation divided by the variable's unit
+    /// (its range unless the domain sets one).
     pub fn diversity(&self) -> f64 {
         let n = self.population.len();
         if n < 2 {
@@ -302,7 +305,8 @@ impl Memetic {
         let mut total = 0.0;
         let mut counted = 0usize;
         for (i, v) in vars.iter().enumerate() {
-            if v.range() <= 0.0 {
+            let unit = if v.discrete { v.range() } else { v.unit };
+            if v.range() <= 0.0 || unit <= 0.0 {
                 continue;
             }
             let mean = self.population.iter().map(|p| p.x[i]).sum::<f64>() / n as f64;
@@ -312,7 +316,7 @@ impl Memetic {
                 .map(|p| (p.x[i] - mean).powi(2))
                 .sum::<f64>()
                 / n as f64;
-            total += var.sqrt() / v.range();
+            total += var.sqrt() / unit;
             counted += 1;
         }
         if counted == 0 {
@@ -511,6 +515,11 @@ impl Memetic {
         let count = self.config.population - self.population.len();
         self.to_polish = self.fill(&sources, count, 2.0);
         self.to_polish.reverse();
+    }
+
+    /// Adds `extra` evaluations to the budget (a finished run can go on).
+    pub fn extend_budget(&mut self, extra: usize) {
+        self.config.max_evaluations = self.config.max_evaluations.saturating_add(extra);
     }
 
     /// Where the run stands.

@@ -73,6 +73,11 @@ pub struct Var {
     pub max: f64,
     /// Whole numbers only; changed by mutation and crossover, never by Adam.
     pub discrete: bool,
+    /// The variable's natural step: Adam's step is `lr × unit` and a mutation's standard
+    /// deviation `sigma × unit`. The constructors set it to the range (the paper's "steps in
+    /// parameter units", per-parameter rates by range); [`Var::with_unit`] sets it for
+    /// variables whose range says little about their scale (camera parameters).
+    pub unit: f64,
 }
 
 impl Var {
@@ -82,6 +87,7 @@ impl Var {
             min,
             max,
             discrete: false,
+            unit: max - min,
         }
     }
 
@@ -91,7 +97,13 @@ impl Var {
             min,
             max,
             discrete: true,
+            unit: max - min,
         }
+    }
+
+    /// The same variable with another step unit.
+    pub fn with_unit(self, unit: f64) -> Var {
+        Var { unit, ..self }
     }
 
     /// `max − min`.
@@ -136,6 +148,12 @@ impl Domain {
                     v.min, v.max
                 )));
             }
+            if !(v.unit.is_finite() && v.unit >= 0.0) {
+                return Err(OptimError(format!(
+                    "variable {i} has an invalid unit {}",
+                    v.unit
+                )));
+            }
             if v.discrete && v.min.ceil() > v.max.floor() {
                 return Err(OptimError(format!(
                     "discrete variable {i} has no whole number in [{}, {}]",
@@ -151,10 +169,12 @@ impl Domain {
         Domain::new(
             specs
                 .iter()
-                .map(|s| Var {
-                    min: s.min,
-                    max: s.max,
-                    discrete: !s.kind.is_continuous(),
+                .map(|s| {
+                    if s.kind.is_continuous() {
+                        Var::continuous(s.min, s.max)
+                    } else {
+                        Var::discrete(s.min, s.max)
+                    }
                 })
                 .collect(),
         )
