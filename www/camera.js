@@ -97,8 +97,12 @@ export class CameraCapture {
   }
 
   stop() {
-    this.stream?.getTracks().forEach((t) => t.stop());
+    const tracks = this.stream?.getTracks() ?? [];
+    tracks.forEach((t) => t.stop());
+    // Kept for the browser test that checks the camera is released.
+    if (tracks.length && window.procfit) window.procfit.lastCameraTracks = tracks;
     this.stream = null;
+    this.video.srcObject = null;
   }
 
   close() {

@@ -8,6 +8,8 @@ import { loadPhoto, isModelFile, MAX_PHOTOS } from './photos.js';
 import { CameraCapture } from './camera.js';
 import { Viewer } from './viewer.js';
 import { Editor, LODS } from './editor.js';
+import { MaskEditor, autoMask } from './masking.js';
+import { FitRunner } from './fitting.js';
 
 const $ = (id) => document.getElementById(id);
 const client = new WorkerClient();
@@ -67,6 +69,49 @@ async function addFiles(files, source = 'file') {
 function addPhoto(photo) {
   state.photos.push(photo);
   selectPhoto(photo.id);
+  findMask(photo);
+}
+
+/** Runs the automatic mask for `photo`, keeping the page told. */
+async function findMask(photo) {
+  photo.maskState = 'working';
+  renderMaskState();
+  try {
+    await autoMask(client, photo);
+    photo.maskState = 'ready';
+  } catch (err) {
+    photo.maskState = 'failed';
+    photo.maskError = err.message;
+  }
+  if (!state.photos.includes(photo)) {
+    client.call(REQUESTS.MASK_DROP, { key: String(photo.id) }).catch(() => {});
+    return;
+  }
+  if (state.selected === photo.id) maskEditor.setPhoto(photo);
+  renderMaskState();
+}
+
+function renderMaskState() {
+  const box = $('mask-state');
+  const photo = state.photos.find((p) => p.id === state.selected);
+  $('mask-tools').hidden = !photo?.mask;
+  box.dataset.kind = '';
+  if (!photo) box.textContent = '';
+  else if (photo.maskState === 'working') box.textContent = 'Finding the object…';
+  else if (photo.maskState === 'failed') {
+    box.textContent = `No object found: ${photo.maskError}. Try a photo with the object in the middle against a plain background, or draw a box around it.`;
+    box.dataset.kind = 'warn';
+  } else if (photo.mask) {
+    const m = photo.mask;
+    const pct = Math.round(100 * m.confidence);
+    if (m.low_confidence) {
+      box.dataset.kind = 'warn';
+      box.textContent = `Please check the mask (confidence ${pct} %)${m.warnings.length ? ': ' + m.warnings.join('; ') : ''}. Blue is the object, dark is background, amber is ignored.`;
+    } else {
+      box.textContent = `Object found (confidence ${pct} %). Blue is the object, dark is background, amber is ignored. Correct it with the tools below if needed.`;
+    }
+  }
+  updateFitButton();
 }
 
 function selectPhoto(id) {
@@ -79,6 +124,7 @@ function removePhoto(id) {
   if (i < 0) return;
   state.photos[i].bitmap.close();
   state.photos.splice(i, 1);
+  client.call(REQUESTS.MASK_DROP, { key: String(id) }).catch(() => {});
   if (state.selected === id) state.selected = state.photos[Math.max(0, i - 1)]?.id ?? null;
   renderPhotos();
 }
@@ -97,11 +143,16 @@ function renderPhotos() {
   }
   const photo = state.photos.find((p) => p.id === state.selected);
   $('photo-view').hidden = !photo;
+  $('mask-empty').hidden = !!photo;
+  maskEditor.setPhoto(photo ?? null);
+  renderMaskState();
   if (!photo) return;
   const canvas = $('photo-canvas');
   canvas.width = photo.width;
   canvas.height = photo.height;
   canvas.getContext('2d').drawImage(photo.bitmap, 0, 0);
+  // Portrait photos stay within the screen's height; the mask overlay follows the photo.
+  document.querySelector('#photo-view .stack').style.maxWidth = `calc(75vh * ${photo.width / photo.height})`;
   $('photo-caption').textContent = `${photo.name} — ${photo.width}×${photo.height} px${state.photos.length > 1 ? ` · photo ${state.photos.indexOf(photo) + 1} of ${state.photos.length}` : ''}`;
 }
 
@@ -153,6 +204,26 @@ const camera = new CameraCapture({
   },
   onError: (message) => say(photosMessage, message),
 });
+const maskEditor = new MaskEditor({
+  overlay: $('mask-canvas'),
+  client,
+  onChange: () => renderMaskState(),
+  onError: (message) => say(photosMessage, message),
+});
+document.querySelectorAll('input[name="tool"]').forEach((r) =>
+  r.addEventListener('change', () => r.checked && maskEditor.setTool(r.value)),
+);
+$('brush').addEventListener('input', (e) => (maskEditor.brush = Number(e.target.value)));
+$('mask-show').addEventListener('change', (e) => {
+  maskEditor.show = e.target.checked;
+  maskEditor.draw();
+});
+$('mask-auto').addEventListener('click', () => {
+  const photo = state.photos.find((p) => p.id === state.selected);
+  if (photo) findMask(photo);
+});
+window.procfit.maskEditor = maskEditor;
+
 $('camera-open').addEventListener('click', () => {
   say(photosMessage, '');
   camera.open();
@@ -212,6 +283,8 @@ function buildGeneratorChoices() {
     input.addEventListener('change', () => chooseGenerator(name));
     box.append(el('label', { class: 'choice', for: `gen-${name}` }, [input, ' ', spec ? label : `${label} `, spec ? '' : el('span', { class: 'muted' }, ['(not in this build yet)'])]));
   }
+  const auto = el('input', { type: 'radio', name: 'generator', value: 'auto', id: 'gen-auto' });
+  box.append(el('label', { class: 'choice', for: 'gen-auto' }, [auto, ' Automatic ', el('span', { class: 'muted' }, ['(the fit picks)'])]));
   for (const spec of state.specs.filter((g) => !KNOWN.some(([n]) => n === g.name))) {
     const input = el('input', { type: 'radio', name: 'generator', value: spec.name, id: `gen-${spec.name}` });
     input.addEventListener('change', () => chooseGenerator(spec.name));
@@ -226,6 +299,7 @@ function fillPresets(spec, selected) {
     ...spec.presets.map((p) => el('option', { value: p.name }, [p.label])),
   );
   if (selected === 'custom') select.append(el('option', { value: 'custom' }, ['Opened file']));
+  if (selected === 'fitted') select.append(el('option', { value: 'fitted' }, ['Fitted to the photos']));
   select.value = selected ?? '';
 }
 
@@ -271,7 +345,7 @@ async function openModelFile(file) {
 
 function fileStem() {
   const st = state.editor.state;
-  return stem(`${st.generator}${state.presetName && state.presetName !== 'custom' ? '-' + state.presetName : ''}-${LODS[st.lod].toLowerCase()}`);
+  return stem(`${st.generator}${state.presetName && !['custom', 'fitted'].includes(state.presetName) ? '-' + state.presetName : ''}-${LODS[st.lod].toLowerCase()}`);
 }
 
 $('download-glb').addEventListener('click', async () => {
@@ -360,6 +434,62 @@ function setUpModelStep() {
   });
 }
 
+// ---- Fit ------------------------------------------------------------------------------------
+
+const fitMessage = $('fit-message');
+const fitter = new FitRunner({
+  client,
+  els: { stage: $('fit-stage'), eta: $('fit-eta'), bar: $('fit-bar'), preview: $('fit-preview'), curve: $('fit-curve'), box: $('fit-progress') },
+});
+window.procfit.fitter = fitter;
+
+function fitGenerator() {
+  return document.querySelector('input[name="generator"]:checked')?.value ?? 'auto';
+}
+
+function updateFitButton() {
+  const ready = state.photos.length > 0 && state.photos.every((p) => p.mask);
+  const button = $('fit-start');
+  button.disabled = !ready || !!fitter.running || !state.editor;
+  button.title = ready ? '' : 'Add a photo and wait for its mask first';
+}
+
+$('fit-start').addEventListener('click', async () => {
+  say(fitMessage, '');
+  const generator = fitGenerator();
+  const spec = state.specs.find((g) => g.name === generator);
+  if (spec && !spec.differentiable) {
+    say(fitMessage, `The ${spec.label.toLowerCase()} generator cannot be fitted in this build; choose another or Automatic.`);
+    return;
+  }
+  $('fit-cancel').hidden = false;
+  $('fit-start').disabled = true;
+  $('fit-cancel').focus();
+  let outcome = 'failed';
+  try {
+    const out = await fitter.run({ generator, photos: state.photos.slice(), quality: Number($('fit-quality').value) });
+    const r = out.result;
+    chooseGenerator(r.generator, { params: r.params, lod: state.editor.lod, preset: 'fitted' });
+    say(
+      fitMessage,
+      out.cancelled
+        ? `Stopped after ${out.seconds.toFixed(1)} s; the best model so far is below.`
+        : `Fitted in ${out.seconds.toFixed(1)} s (${r.evaluations.toLocaleString('en')} evaluations). Edit the model below; Reset returns to the fitted values.`,
+      'info',
+    );
+    outcome = out.cancelled ? 'cancelled' : 'done';
+  } catch (err) {
+    say(fitMessage, `The fit failed: ${err.message}. Check the masks above (the object must be inside the photo, not touching every edge), then try again.`);
+    outcome = 'failed';
+  } finally {
+    $('fit-cancel').hidden = true;
+    updateFitButton();
+    // For the browser tests: the fit's outcome, set once the page is back to rest.
+    document.body.dataset.fitted = outcome;
+  }
+});
+$('fit-cancel').addEventListener('click', () => fitter.cancel());
+
 async function boot() {
   loadSamples();
   try {
@@ -376,6 +506,7 @@ async function boot() {
   setUpModelStep();
   buildGeneratorChoices();
   chooseGenerator(state.specs[0].name);
+  updateFitButton();
   document.body.dataset.ready = 'true';
 }
 

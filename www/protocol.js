@@ -22,6 +22,19 @@ export const REQUESTS = Object.freeze({
   PARAMS_JSON: 'model/json',
   // { bytes: ArrayBuffer } (a procfit GLB or params JSON) → { generator, params, lod, seed }.
   OPEN_MODEL: 'model/open',
+  // Masks, one session per photo `key` (a string the page chooses). Each answers
+  // { width, height, bbox, confidence, low_confidence, warnings, codes: ArrayBuffer } with the
+  // mask in working pixels: object 255, background 0, don't care 128.
+  MASK_AUTO: 'mask/auto', //   { key, width, height, rgba: ArrayBuffer } → mask (automatic)
+  MASK_RECT: 'mask/rect', //   { key, rect: [x0, y0, x1, y1] } → mask (start over from a box)
+  MASK_STROKE: 'mask/stroke', // { key, object: bool, points: [x, y, …], radius } → mask
+  MASK_DROP: 'mask/drop', //   { key } → {} (the photo was removed)
+  // { fitId, generator ('auto' or a name), seed, quality, masks: [{ width, height, codes }] }
+  // → { cancelled, result: { generator, params, lod, seed, loss, evaluations } }. On the way:
+  // event 'progress' { stage, generator, iteration, evaluations, work_done, work_total,
+  // best_loss, params, done, preview: { width, height, coverage: ArrayBuffer } | null }.
+  FIT_RUN: 'fit/run',
+  FIT_CANCEL: 'fit/cancel', // { fitId } → { found }: the running fit stops after its slice
 });
 
-export const PROTOCOL_VERSION = 2;
+export const PROTOCOL_VERSION = 3;

@@ -6,6 +6,12 @@
 use std::sync::Mutex;
 use wasm_bindgen::prelude::*;
 
+mod fit;
+mod mask;
+
+pub use fit::FitSession;
+pub use mask::MaskSession;
+
 #[cfg(feature = "threads")]
 pub use wasm_bindgen_rayon::init_thread_pool;
 

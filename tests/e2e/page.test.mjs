@@ -85,6 +85,76 @@ test('a sample puts its photo in step 1 and picks its generator', async () => {
   await screenshot(page, '02-sample');
 });
 
+test('the sample gets an automatic mask drawn over the photo, and a box redraws it', async () => {
+  await page.waitForFunction(() => /Object found|check the mask/.test(document.getElementById('mask-state').textContent), null, { timeout: 60000 });
+  const m = await page.evaluate(() => {
+    const p = window.procfit.state.photos.at(-1);
+    const codes = p.mask.codes;
+    let obj = 0;
+    for (const c of codes) if (c === 255) obj += 1;
+    return { width: p.mask.width, height: p.mask.height, share: obj / codes.length, bbox: p.mask.bbox };
+  });
+  // The sample mug fills a known part of the frame: the mask must find an object of that size.
+  assert.equal(m.width, 512);
+  assert.ok(m.share > 0.05 && m.share < 0.6, `object covers ${(m.share * 100).toFixed(1)} % of the photo`);
+  await screenshot(page, '02b-mask');
+  // A box tool drag from corner to corner of the mask's bounding box, grown a little.
+  await page.check('input[name="tool"][value="rect"]');
+  const box = await page.locator('#mask-canvas').boundingBox();
+  const [x0, y0, x1, y1] = m.bbox;
+  const sx = box.width / m.width;
+  const sy = box.height / m.height;
+  await page.mouse.move(box.x + (x0 - 10) * sx, box.y + (y0 - 10) * sy);
+  await page.mouse.down();
+  await page.mouse.move(box.x + (x1 + 10) * sx, box.y + (y1 + 10) * sy, { steps: 4 });
+  const before = await page.evaluate(() => window.procfit.state.photos.at(-1).mask.codes);
+  await page.mouse.up();
+  await page.waitForFunction((b) => window.procfit.state.photos.at(-1).mask.codes !== b, before);
+  const share = await page.evaluate(() => {
+    const codes = window.procfit.state.photos.at(-1).mask.codes;
+    return codes.filter((c) => c === 255).length / codes.length;
+  });
+  assert.ok(Math.abs(share - m.share) < 0.05, `the box changed the object share from ${m.share} to ${share}`);
+  await page.check('input[name="tool"][value="none"]');
+});
+
+test('the fit runs with progress, draws its outline, and the editor gets the fitted model', async () => {
+  await page.selectOption('#fit-quality', '0.25');
+  const before = await page.evaluate(() => window.procfit.editor.params.slice());
+  const stages = [];
+  await page.exposeFunction('recordStage', (s) => stages.push(s));
+  await page.evaluate(() => window.procfit.fitter.addEventListener('progress', (e) => window.recordStage(e.detail.stage)));
+  const t0 = Date.now();
+  await page.click('#fit-start');
+  await page.waitForFunction(() => document.body.dataset.fitted, null, { timeout: 180000 });
+  const seconds = (Date.now() - t0) / 1000;
+  assert.equal(await page.evaluate(() => document.body.dataset.fitted), 'done', await messageOf('fit-message'));
+  assert.match(await messageOf('fit-message'), /Fitted in/);
+  assert.ok(stages.includes(1) && stages.includes(3), `stages seen: ${[...new Set(stages)]}`);
+  assert.equal(await page.evaluate(() => document.getElementById('fit-bar').value), 1);
+  await settled();
+  const after = await page.evaluate(() => window.procfit.editor.params.slice());
+  assert.notDeepEqual(after, before, 'the editor did not receive the fitted parameters');
+  assert.equal(await page.inputValue('#preset'), 'fitted');
+  console.log(`# sample mug fit (quick): ${seconds.toFixed(1)} s`);
+  await screenshot(page, '02c-fitted');
+});
+
+test('a long fit can be cancelled and keeps the best model so far', async () => {
+  await page.selectOption('#fit-quality', '3');
+  await page.evaluate(() => delete document.body.dataset.fitted);
+  await page.click('#fit-start');
+  await page.waitForFunction(() => document.getElementById('fit-bar').value > 0, null, { timeout: 60000 });
+  await page.click('#fit-cancel');
+  await page.waitForFunction(() => document.body.dataset.fitted, null, { timeout: 60000 });
+  assert.equal(await page.evaluate(() => document.body.dataset.fitted), 'cancelled');
+  assert.match(await messageOf('fit-message'), /Stopped after/);
+  assert.equal(await page.isHidden('#fit-cancel'), true);
+  await page.selectOption('#fit-quality', '1');
+  await page.selectOption('#preset', 'mug');
+  await settled();
+});
+
 test('a slider moved from the keyboard changes the mesh, the view and the GLB; undo/redo restore it', async () => {
   const before = await viewFingerprint();
   const glbBefore = await page.evaluate(() => window.procfit.editor.glb.bytes.length);
@@ -254,7 +324,8 @@ test('the camera (fake device) takes several shots', async () => {
   await page.waitForFunction((n) => document.querySelectorAll('#thumbs li').length === n + 2, n0);
   assert.equal(await page.evaluate(() => document.querySelector('dialog#camera').open), false);
   // The camera is released when the dialog closes.
-  assert.equal(await page.evaluate(() => document.querySelector('dialog#camera video').srcObject?.active ?? false), false);
+  assert.equal(await page.evaluate(() => document.querySelector('dialog#camera video').srcObject), null);
+  assert.equal(await page.evaluate(() => window.procfit.lastCameraTracks?.every((t) => t.readyState === 'ended')), true);
 });
 
 test('every control is reachable by keyboard and has a label', async () => {
