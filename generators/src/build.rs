@@ -15,6 +15,8 @@ use glam::{DVec3, Vec2, Vec3};
 /// Face normals further apart than this (cosine of 75°) never smooth into each other, so a
 /// coarse level keeps its hard corners.
 pub const CREASE_COS: f64 = 0.2588;
+/// Cosine of half the crease angle (37.5°).
+const CREASE_HALF_COS: f64 = 0.7934;
 
 /// A point in space over scalar `S`.
 pub type P3<S> = [S; 3];
@@ -183,12 +185,34 @@ fn corner_normals(p: &[DVec3], tris: &[[u32; 3]], groups: &[u16]) -> Vec<Vec3> {
             fill[i as usize] += 1;
         }
     }
+    // Fast path: a vertex whose faces all share one smoothing group and lie within half the
+    // crease angle of one of them is smooth all round (any two of its faces are then within
+    // the crease), so all its corners share one normal, computed once.
+    let smooth: Vec<Option<DVec3>> = (0..p.len())
+        .map(|v| {
+            let rows = &adj[start[v] as usize..start[v + 1] as usize];
+            let &first = rows.first()?;
+            let (g, r) = (groups[first as usize], unit[first as usize]);
+            let uniform = g != 0
+                && rows
+                    .iter()
+                    .all(|&o| groups[o as usize] == g && unit[o as usize].dot(r) > CREASE_HALF_COS);
+            uniform.then(|| {
+                rows.iter()
+                    .map(|&o| face[o as usize])
+                    .sum::<DVec3>()
+                    .normalize_or_zero()
+            })
+        })
+        .collect();
     let mut out = Vec::with_capacity(3 * tris.len());
     for (ti, t) in tris.iter().enumerate() {
         let g = groups[ti];
         for &v in t {
             let n = if g == 0 {
                 unit[ti]
+            } else if let Some(n) = smooth[v as usize] {
+                n
             } else {
                 let rows = &adj[start[v as usize] as usize..start[v as usize + 1] as usize];
                 rows.iter()

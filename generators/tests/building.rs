@@ -428,3 +428,46 @@ fn bad_input_is_an_error_not_a_panic() {
         Building.generate(&tame, Lod::High)
     );
 }
+
+#[test]
+fn buildings_are_flat_shaded() {
+    let m = Building
+        .generate(&Building.preset("villa").expect("villa").values, Lod::Ultra)
+        .expect("generate");
+    for (t, tri) in m.triangles.iter().enumerate() {
+        let [a, b, c] = tri.map(|i| m.positions[i as usize]);
+        let face = (b - a).cross(c - a).normalize();
+        for k in 0..3 {
+            assert!(
+                m.corner_normals[3 * t + k].dot(face) > 0.9999,
+                "triangle {t}"
+            );
+        }
+    }
+}
+
+#[test]
+fn range_corners_give_valid_meshes() {
+    // Every parameter at its minimum, at its maximum, and alternating, at every level.
+    let spec = Building.params();
+    let corners = [
+        spec.iter().map(|s| s.min).collect::<Vec<_>>(),
+        spec.iter().map(|s| s.max).collect(),
+        spec.iter()
+            .enumerate()
+            .map(|(i, s)| if i % 2 == 0 { s.min } else { s.max })
+            .collect(),
+        spec.iter()
+            .enumerate()
+            .map(|(i, s)| if i % 2 == 1 { s.min } else { s.max })
+            .collect(),
+    ];
+    for (c, p) in corners.iter().enumerate() {
+        for lod in Lod::ALL {
+            let m = Building.generate(p, lod).expect("generate");
+            if let Err(e) = validate(&m) {
+                panic!("corner {c} {lod:?}: {e}");
+            }
+        }
+    }
+}

@@ -537,12 +537,78 @@ fn gradients_are_the_same_on_many_threads() {
     let parallel: Vec<Vec<f64>> = std::thread::scope(|s| {
         let handles: Vec<_> = presets
             .iter()
-            .map(|p| s.spawn(|| (0..5).map(|_| grad(&p.values)).last()))
+            .map(|p| {
+                s.spawn(|| {
+                    // Repeat so the threads' recordings overlap in time.
+                    let mut g = Vec::new();
+                    for _ in 0..5 {
+                        g = grad(&p.values);
+                    }
+                    g
+                })
+            })
             .collect();
         handles
             .into_iter()
-            .map(|h| h.join().expect("thread").expect("gradient"))
+            .map(|h| h.join().expect("thread"))
             .collect()
     });
     assert_eq!(serial, parallel);
+}
+
+#[test]
+fn mug_body_is_smooth_shaded_and_caps_are_flat() {
+    // The body has no crease sharper than the crease limit at MEDIUM, so every body vertex
+    // has one normal for all its corners; the handle's end caps are flat.
+    let m = Dish
+        .generate(&Dish.preset("mug").expect("mug").values, Lod::Medium)
+        .expect("generate");
+    let mut normal_of = vec![None; m.positions.len()];
+    for (t, tri) in m.triangles.iter().enumerate() {
+        for (k, &v) in tri.iter().enumerate() {
+            let n = m.corner_normals[3 * t + k];
+            if m.tri_parts[t] == 0 {
+                match normal_of[v as usize] {
+                    None => normal_of[v as usize] = Some(n),
+                    Some(o) => assert!(n.dot(o) > 0.9999, "vertex {v}: {n} vs {o}"),
+                }
+            }
+        }
+    }
+    // Cap triangles: every corner has the face normal.
+    let mut flat = 0;
+    for (t, tri) in m.triangles.iter().enumerate() {
+        let [a, b, c] = tri.map(|i| m.positions[i as usize]);
+        let face = (b - a).cross(c - a).normalize();
+        if m.tri_parts[t] == 1 && (0..3).all(|k| m.corner_normals[3 * t + k].dot(face) > 0.9999) {
+            flat += 1;
+        }
+    }
+    assert!(flat >= 2 * 12, "only {flat} flat handle triangles");
+}
+
+#[test]
+fn range_corners_give_valid_meshes() {
+    // Every parameter at its minimum, at its maximum, and alternating, at every level.
+    let spec = Dish.params();
+    let corners = [
+        spec.iter().map(|s| s.min).collect::<Vec<_>>(),
+        spec.iter().map(|s| s.max).collect(),
+        spec.iter()
+            .enumerate()
+            .map(|(i, s)| if i % 2 == 0 { s.min } else { s.max })
+            .collect(),
+        spec.iter()
+            .enumerate()
+            .map(|(i, s)| if i % 2 == 1 { s.min } else { s.max })
+            .collect(),
+    ];
+    for (c, p) in corners.iter().enumerate() {
+        for lod in Lod::ALL {
+            let m = Dish.generate(p, lod).expect("generate");
+            if let Err(e) = validate(&m) {
+                panic!("corner {c} {lod:?}: {e}");
+            }
+        }
+    }
 }
