@@ -53,7 +53,10 @@ impl MaskSession {
     /// (`[x0, y0, x1, y1, …]` in working pixels) and cuts again.
     #[wasm_bindgen(js_name = addStroke)]
     pub fn add_stroke(&mut self, object: bool, points: &[f32], radius: f32) -> Result<(), JsError> {
-        if points.is_empty() || points.len() % 2 != 0 || !points.iter().all(|v| v.is_finite()) {
+        if points.is_empty()
+            || !points.len().is_multiple_of(2)
+            || !points.iter().all(|v| v.is_finite())
+        {
             return Err(JsError::new("a stroke needs finite x, y pairs"));
         }
         if !(radius.is_finite() && radius > 0.0) {
