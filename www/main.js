@@ -4,7 +4,8 @@
 import { WorkerClient } from './client.js';
 import { REQUESTS } from './protocol.js';
 import { el, say, download, stem } from './ui.js';
-import { loadPhoto, isModelFile, MAX_PHOTOS } from './photos.js';
+import { loadPhoto, isModelFile, MAX_PHOTOS, reserveIds } from './photos.js';
+import * as store from './store.js';
 import { CameraCapture } from './camera.js';
 import { Viewer } from './viewer.js';
 import { Editor, LODS } from './editor.js';
@@ -24,8 +25,17 @@ client.addEventListener('status', (e) => {
   status.dataset.state = d.state;
   if (d.state === 'ready') {
     status.textContent = `ready — ${d.threads} thread${d.threads === 1 ? '' : 's'}`;
-    // After a crash the worker is new but the model lives here: show it again.
-    if (client.restarts > 0) state.editor?.schedule();
+    const notice = $('notice');
+    notice.hidden = d.threaded;
+    notice.textContent = d.threaded
+      ? ''
+      : 'procfit is running on one thread: this page is served without cross-origin isolation (COOP/COEP headers), so it cannot use all your cores. Everything works; fits take longer.';
+    // After a crash the worker is new but the session lives here: show the model again and
+    // give each mask a worker session for corrections.
+    if (client.restarts > 0) {
+      state.editor?.schedule();
+      reviveMasks();
+    }
   } else if (d.state === 'starting') {
     status.textContent = 'starting…';
   } else if (d.state === 'crashed') {
@@ -70,7 +80,76 @@ function addPhoto(photo) {
   state.photos.push(photo);
   selectPhoto(photo.id);
   findMask(photo);
+  persist();
 }
+
+/** Worker sessions for masks the page already has (after a restore or a worker restart). */
+function reviveMasks() {
+  for (const p of state.photos) {
+    if (p.mask) autoMask(client, p, { keep: true }).catch(() => {});
+  }
+}
+
+// ---- Persistence ----------------------------------------------------------------------------
+
+let persistTimer = null;
+/** Saves the session to IndexedDB a moment after the last change (many changes → one write). */
+function persist() {
+  clearTimeout(persistTimer);
+  persistTimer = setTimeout(async () => {
+    if (!state.editor?.state || state.clearing) return;
+    // For the browser tests: when the last save that finished had started.
+    const started = Date.now();
+    try {
+      await store.save({
+        photos: await Promise.all(state.photos.map(store.photoRecord)),
+        selected: state.selected,
+        model: { ...state.editor.state, base: state.editor.base, presetName: state.presetName },
+      });
+      document.body.dataset.saved = String(started);
+    } catch (err) {
+      say($('notice'), `Your work could not be saved on this device (${err.message}); it stays until you close the page.`, 'info');
+    }
+  }, 400);
+}
+
+/** Restores the saved session, if any; says so with a way to start over. */
+async function restore() {
+  const rec = await store.load();
+  if (!rec) return false;
+  const photos = [];
+  for (const r of rec.photos ?? []) {
+    try {
+      photos.push(await store.photoFromRecord(r));
+    } catch {
+      // A photo that cannot be decoded any more is dropped; the rest of the session stays.
+    }
+  }
+  photos.forEach((p) => reserveIds(p.id));
+  state.photos = photos;
+  state.selected = photos.some((p) => p.id === rec.selected) ? rec.selected : photos[0]?.id ?? null;
+  renderPhotos();
+  reviveMasks();
+  // Photos saved before their mask was ready get one now.
+  photos.filter((p) => !p.mask).forEach(findMask);
+  const m = rec.model;
+  if (m && state.specs.some((g) => g.name === m.generator)) {
+    chooseGenerator(m.generator, { params: m.params, lod: m.lod, preset: m.presetName ?? 'custom' });
+    if (Array.isArray(m.base) && m.base.length === m.params.length) state.editor.base = m.base;
+  }
+  $('restored-text').textContent = `Restored your last session${photos.length ? ` (${photos.length} photo${photos.length === 1 ? '' : 's'})` : ''}.`;
+  $('restored').hidden = false;
+  return true;
+}
+
+$('start-over').addEventListener('click', async () => {
+  // No save may follow the clear (IndexedDB runs a store's transactions in order, so one
+  // already in flight lands before it).
+  state.clearing = true;
+  clearTimeout(persistTimer);
+  await store.clear().catch(() => {});
+  location.reload();
+});
 
 /** Runs the automatic mask for `photo`, keeping the page told. */
 async function findMask(photo) {
@@ -89,6 +168,7 @@ async function findMask(photo) {
   }
   if (state.selected === photo.id) maskEditor.setPhoto(photo);
   renderMaskState();
+  persist();
 }
 
 function renderMaskState() {
@@ -117,6 +197,7 @@ function renderMaskState() {
 function selectPhoto(id) {
   state.selected = id;
   renderPhotos();
+  persist();
 }
 
 function removePhoto(id) {
@@ -125,6 +206,7 @@ function removePhoto(id) {
   state.photos[i].bitmap.close();
   state.photos.splice(i, 1);
   client.call(REQUESTS.MASK_DROP, { key: String(id) }).catch(() => {});
+  persist();
   if (state.selected === id) state.selected = state.photos[Math.max(0, i - 1)]?.id ?? null;
   renderPhotos();
 }
@@ -207,7 +289,10 @@ const camera = new CameraCapture({
 const maskEditor = new MaskEditor({
   overlay: $('mask-canvas'),
   client,
-  onChange: () => renderMaskState(),
+  onChange: () => {
+    renderMaskState();
+    persist();
+  },
   onError: (message) => say(photosMessage, message),
 });
 document.querySelectorAll('input[name="tool"]').forEach((r) =>
@@ -393,7 +478,10 @@ function setUpModelStep() {
   $('redo').addEventListener('click', () => editor.redo());
   $('reset').addEventListener('click', () => editor.reset());
 
-  editor.addEventListener('change', updateButtons);
+  editor.addEventListener('change', () => {
+    updateButtons();
+    persist();
+  });
   editor.addEventListener('generated', (e) => {
     const d = e.detail;
     say(modelMessage, '');
@@ -403,6 +491,8 @@ function setUpModelStep() {
     $('viewer-info').textContent = `${d.parts.length} part${d.parts.length === 1 ? '' : 's'} · ${d.triangles.toLocaleString('en')} triangles · ${(d.bytes / 1024).toFixed(0)} KB${latency}`;
     renderLegend();
     updateButtons();
+    // Every shown model is worth keeping (a drag fires no change event until it ends).
+    persist();
   });
   editor.addEventListener('error', (e) => {
     say(modelMessage, `The model could not be built: ${e.detail.message}`);
@@ -505,7 +595,7 @@ async function boot() {
   }
   setUpModelStep();
   buildGeneratorChoices();
-  chooseGenerator(state.specs[0].name);
+  if (!(await restore())) chooseGenerator(state.specs[0].name);
   updateFitButton();
   document.body.dataset.ready = 'true';
 }

@@ -7,8 +7,12 @@ import { REQUESTS } from './protocol.js';
 /** Overlay colours (RGBA) by mask code: background dimmed, object tinted, unsure in amber. */
 const TINT = { bg: [20, 20, 30, 120], obj: [40, 110, 255, 70], unsure: [255, 190, 0, 150] };
 
-/** Asks the worker for `photo`'s automatic mask; stores it on the photo. */
-export async function autoMask(client, photo) {
+/**
+ * Asks the worker for `photo`'s automatic mask; stores it on the photo. With `keep`, a mask the
+ * photo already has (restored from storage) is kept and only the worker's session is made, so
+ * later corrections have something to re-cut.
+ */
+export async function autoMask(client, photo, { keep = false } = {}) {
   const c = new OffscreenCanvas(photo.width, photo.height);
   const ctx = c.getContext('2d');
   ctx.drawImage(photo.bitmap, 0, 0);
@@ -18,13 +22,20 @@ export async function autoMask(client, photo) {
     { key: String(photo.id), width: photo.width, height: photo.height, rgba },
     { transfer: [rgba] },
   );
-  setMask(photo, m);
+  if (!(keep && photo.mask)) setMask(photo, m);
   return photo.mask;
 }
 
 function setMask(photo, m) {
   const dontCare = photo.mask && photo.mask.width === m.width && photo.mask.height === m.height ? photo.mask.dontCare : null;
-  photo.mask = { ...m, codes: new Uint8Array(m.codes), dontCare: dontCare ?? new OffscreenCanvas(m.width, m.height) };
+  photo.mask = { ...m, codes: new Uint8Array(m.codes), dontCare: dontCare ?? blankCanvas(m.width, m.height) };
+}
+
+/** A transparent canvas with its 2D context made (convertToBlob refuses a context-less one). */
+function blankCanvas(width, height) {
+  const c = new OffscreenCanvas(width, height);
+  c.getContext('2d');
+  return c;
 }
 
 /** The codes the fit uses: the worker's mask with the user's don't-care strokes on top. */

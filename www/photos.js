@@ -11,6 +11,11 @@ export const MAX_BYTES = 50 * 1024 * 1024;
 
 let nextId = 1;
 
+/** Makes sure new photos get ids above `id` (photos restored from storage keep theirs). */
+export function reserveIds(id) {
+  nextId = Math.max(nextId, id + 1);
+}
+
 /**
  * Decodes `file` (a File or Blob) and downscales it. Resolves with a photo
  * `{ id, name, width, height, bitmap, blob }` (`blob`: the downscaled JPEG kept for storage);

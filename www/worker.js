@@ -182,7 +182,9 @@ async function dispatch(msg) {
 
 async function boot() {
   try {
-    const mod = await import('../pkg/procfit.js');
+    // Threads need SharedArrayBuffer, which needs a cross-origin isolated page (COOP/COEP);
+    // served without those headers, the single-threaded build runs instead.
+    const mod = await import(self.crossOriginIsolated ? '../pkg/procfit.js' : '../pkg-st/procfit.js');
     await mod.default();
     if (mod.threaded()) {
       if (!self.crossOriginIsolated) {
