@@ -57,7 +57,7 @@ lint: setup
 test-rust:
 	cargo test --workspace --locked
 
-test-e2e: wasm wasm-st
+test-e2e: dist
 	node --test --test-concurrency=1 tests/e2e/
 
 test: setup-test lint test-rust test-e2e

@@ -42,18 +42,19 @@ export class Editor extends EventTarget {
     this.glb = null;
     this.latencies = [];
     this.timings = [];
+    this.cameras = [];
   }
 
   /** The state worth saving: generator, params, lod. */
   get state() {
-    return this.spec ? { generator: this.spec.name, params: this.params.slice(), lod: this.lod } : null;
+    return this.spec ? { generator: this.spec.name, params: this.params.slice(), lod: this.lod, cameras: this.cameras.slice() } : null;
   }
 
   /**
    * Shows `generator` with `params` (default: its defaults) as the new base ("reset" returns
    * here); clears the history. Throws for an unknown generator.
    */
-  open(generator, params = null, lod = this.lod) {
+  open(generator, params = null, lod = this.lod, cameras = []) {
     const spec = this.specs.get(generator);
     if (!spec) throw new Error(`this build has no generator called “${generator}”`);
     const changedGenerator = this.spec?.name !== generator;
@@ -61,6 +62,8 @@ export class Editor extends EventTarget {
     this.params = params ? params.slice() : spec.params.map((p) => p.default);
     this.base = this.params.slice();
     this.lod = lod;
+    // The photos' cameras from a fit go into every GLB of this model.
+    this.cameras = cameras.slice();
     this.undoStack = [];
     this.redoStack = [];
     if (changedGenerator) this.buildSliders();
@@ -214,7 +217,7 @@ export class Editor extends EventTarget {
     this.dirtySince = null;
     const reframe = this.reframe;
     this.reframe = false;
-    const request = { generator: this.spec.name, params: this.params.slice(), lod: this.lod };
+    const request = { generator: this.spec.name, params: this.params.slice(), lod: this.lod, cameras: this.cameras.slice() };
     try {
       const t0 = performance.now();
       const { glb, ms } = await this.client.call(REQUESTS.GENERATE_GLB, request);

@@ -134,7 +134,7 @@ async function restore() {
   photos.filter((p) => !p.mask).forEach(findMask);
   const m = rec.model;
   if (m && state.specs.some((g) => g.name === m.generator)) {
-    chooseGenerator(m.generator, { params: m.params, lod: m.lod, preset: m.presetName ?? 'custom' });
+    chooseGenerator(m.generator, { params: m.params, lod: m.lod, preset: m.presetName ?? 'custom', cameras: m.cameras ?? [] });
     if (Array.isArray(m.base) && m.base.length === m.params.length) state.editor.base = m.base;
   }
   $('restored-text').textContent = `Restored your last session${photos.length ? ` (${photos.length} photo${photos.length === 1 ? '' : 's'})` : ''}.`;
@@ -389,14 +389,14 @@ function fillPresets(spec, selected) {
 }
 
 /** Switches to `name` with its first preset (or defaults). */
-function chooseGenerator(name, { params = null, lod = null, preset = undefined } = {}) {
+function chooseGenerator(name, { params = null, lod = null, preset = undefined, cameras = [] } = {}) {
   const spec = state.specs.find((g) => g.name === name);
   if (!spec) return;
   $(`gen-${name}`).checked = true;
   const first = preset === undefined ? spec.presets[0] : null;
   fillPresets(spec, preset ?? first?.name ?? '');
   state.presetName = preset ?? first?.name ?? null;
-  state.editor.open(name, params ?? first?.values ?? null, lod ?? state.editor.lod);
+  state.editor.open(name, params ?? first?.values ?? null, lod ?? state.editor.lod, cameras);
   $('lod').value = String(state.editor.lod);
 }
 
@@ -559,7 +559,7 @@ $('fit-start').addEventListener('click', async () => {
   try {
     const out = await fitter.run({ generator, photos: state.photos.slice(), quality: Number($('fit-quality').value) });
     const r = out.result;
-    chooseGenerator(r.generator, { params: r.params, lod: state.editor.lod, preset: 'fitted' });
+    chooseGenerator(r.generator, { params: r.params, lod: state.editor.lod, preset: 'fitted', cameras: r.cameras });
     say(
       fitMessage,
       out.cancelled

@@ -18,13 +18,16 @@ const handlers = {
   [REQUESTS.THREAD_PROBE]: ({ jobs = 64 } = {}) => ({ threads: wasm.threadProbe(jobs) }),
   [REQUESTS.DEBUG_PANIC]: () => wasm.debugPanic(),
   [REQUESTS.GENERATOR_SPECS]: () => wasm.generatorSpecs(),
-  [REQUESTS.GENERATE_GLB]: ({ generator, params, lod }) => {
+  [REQUESTS.GENERATE_GLB]: ({ generator, params, lod, cameras = [] }) => {
     const t0 = performance.now();
-    const bytes = wasm.generateGlb(generator, Float64Array.from(params), lod);
+    const bytes = wasm.generateGlb(generator, Float64Array.from(params), lod, Float32Array.from(cameras));
     const ms = performance.now() - t0;
     // wasm-bindgen returns a fresh copy, so its buffer can be handed over without another copy.
     return new Transfer({ glb: bytes.buffer, ms }, [bytes.buffer]);
   },
+  [REQUESTS.IOU64]: ({ a, b, lod = 1, side = 128 }) => ({
+    iou: wasm.iou64Models(a.generator, Float64Array.from(a.params), b.generator, Float64Array.from(b.params), lod, side),
+  }),
   [REQUESTS.PARAMS_JSON]: ({ generator, params, lod }) => ({
     text: wasm.paramsJson(generator, Float64Array.from(params), lod),
   }),

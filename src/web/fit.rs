@@ -3,7 +3,6 @@
 //! message loop between them, so the page stays responsive and a cancel arrives promptly;
 //! cancelling is simply not stepping any more.
 
-use crate::glb::export_model;
 use crate::mask::Mask;
 use crate::reconstruct::{FitConfig, Session, export_camera};
 use wasm_bindgen::prelude::*;
@@ -44,6 +43,8 @@ struct ResultOut {
     seed: Option<u64>,
     loss: f64,
     evaluations: usize,
+    /// One camera per photo, [`super::CAMERA_FLOATS`] numbers each, for `generateGlb`.
+    cameras: Vec<f32>,
 }
 
 /// Masks from 8-bit codes (object 255, background 0, don't care 128, anything else a soft
@@ -152,6 +153,13 @@ impl FitSession {
     /// The best model so far (the result once done).
     pub fn result(&self) -> Result<JsValue, JsError> {
         let r = self.session.result().map_err(js)?;
+        let mut cameras = Vec::with_capacity(r.views.len() * super::CAMERA_FLOATS);
+        for v in &r.views {
+            let c = export_camera(v, None);
+            cameras.push(c.yfov);
+            cameras.push(c.aspect);
+            cameras.extend_from_slice(&c.camera_to_world);
+        }
         let out = ResultOut {
             generator: r.model.generator.name(),
             params: r.model.params.clone(),
@@ -159,23 +167,8 @@ impl FitSession {
             seed: r.model.seed,
             loss: r.loss,
             evaluations: r.evaluations,
+            cameras,
         };
         serde_wasm_bindgen::to_value(&out).map_err(js)
-    }
-
-    /// The best model so far as a GLB at level of detail `lod`, with one camera per photo.
-    #[wasm_bindgen(js_name = resultGlb)]
-    pub fn result_glb(&self, lod: u8) -> Result<Vec<u8>, JsError> {
-        let r = self.session.result().map_err(js)?;
-        let mut model = r.model;
-        model.lod = crate::generators::Lod::from_index(usize::from(lod))
-            .ok_or_else(|| JsError::new(&format!("level of detail {lod} is not in 0..=3")))?;
-        let cameras: Vec<_> = r
-            .views
-            .iter()
-            .enumerate()
-            .map(|(i, v)| export_camera(v, Some(format!("photo {}", i + 1))))
-            .collect();
-        export_model(&model, &cameras).map_err(js)
     }
 }

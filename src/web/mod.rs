@@ -187,13 +187,75 @@ fn model_of(generator: &str, params: &[f64], lod: u8) -> Result<crate::model::Mo
     crate::model::Model::new(generator, params, lod).map_err(|e| JsError::new(&e.to_string()))
 }
 
+/// Floats per camera in [`generate_glb`]'s `cameras`: vertical field of view (radians),
+/// aspect (width / height), then the 4×4 camera-to-world matrix in column-major order.
+pub const CAMERA_FLOATS: usize = 18;
+
 /// Generates the model's mesh and writes it as the very GLB the page downloads (generator state
-/// in the scene extras, no cameras). The viewer loads these bytes, so what is shown is what is
-/// saved.
+/// in the scene extras, one camera node per photo from `cameras`, see [`CAMERA_FLOATS`]). The
+/// viewer loads these bytes, so what is shown is what is saved.
 #[wasm_bindgen(js_name = generateGlb)]
-pub fn generate_glb(generator: &str, params: &[f64], lod: u8) -> Result<Vec<u8>, JsError> {
+pub fn generate_glb(
+    generator: &str,
+    params: &[f64],
+    lod: u8,
+    cameras: &[f32],
+) -> Result<Vec<u8>, JsError> {
     let model = model_of(generator, params, lod)?;
-    crate::glb::export_model(&model, &[]).map_err(|e| JsError::new(&e.to_string()))
+    if !cameras.len().is_multiple_of(CAMERA_FLOATS) {
+        return Err(JsError::new(&format!(
+            "{} camera numbers is not a multiple of {CAMERA_FLOATS}",
+            cameras.len()
+        )));
+    }
+    let cameras: Vec<crate::glb::ExportCamera> = cameras
+        .chunks_exact(CAMERA_FLOATS)
+        .enumerate()
+        .map(|(i, c)| {
+            let mut camera_to_world = [0.0; 16];
+            camera_to_world.copy_from_slice(&c[2..]);
+            crate::glb::ExportCamera {
+                name: Some(format!("photo {}", i + 1)),
+                yfov: c[0],
+                aspect: c[1],
+                znear: 0.01,
+                zfar: None,
+                camera_to_world,
+            }
+        })
+        .collect();
+    crate::glb::export_model(&model, &cameras).map_err(|e| JsError::new(&e.to_string()))
+}
+
+/// The paper's IoU-64 (mean silhouette IoU over 64 turntable views at `side`², both meshes
+/// normalised to a unit box) between two models at level of detail `lod`: the benchmark's
+/// measure of how well a fit recovered a known shape.
+#[wasm_bindgen(js_name = iou64Models)]
+pub fn iou64_models(
+    generator_a: &str,
+    params_a: &[f64],
+    generator_b: &str,
+    params_b: &[f64],
+    lod: u8,
+    side: u32,
+) -> Result<f64, JsError> {
+    if !(16..=1024).contains(&side) {
+        return Err(JsError::new("side must be in 16..=1024"));
+    }
+    let mesh = |g: &str, p: &[f64]| {
+        let m = model_of(g, p, lod)?;
+        m.generator
+            .generate(&m.params, m.lod)
+            .map_err(|e| JsError::new(&e.to_string()))
+    };
+    let a = mesh(generator_a, params_a)?;
+    let b = mesh(generator_b, params_b)?;
+    crate::reconstruct::iou64(
+        (&a.positions, &a.triangles),
+        (&b.positions, &b.triangles),
+        side,
+    )
+    .map_err(|e| JsError::new(&e.to_string()))
 }
 
 /// The params JSON of a model (what "download params" saves).

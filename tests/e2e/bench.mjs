@@ -52,6 +52,33 @@ try {
     }
     await page.close();
   }
+  // The sample cup fit at Normal effort with the page's threads, and how close it came to the
+  // truth the sample was rendered from (IoU-64 in the model frames: the fitted yaw is not
+  // aligned, so a turned handle counts against it — a lower bound).
+  const fits = [];
+  const { page } = await openPage(browser.context, server.url);
+  await page.waitForSelector('body[data-ready="true"]', { timeout: 120000 });
+  const threads = await page.evaluate(() => window.procfit.client.info.threads);
+  const truth = JSON.parse(await (await fetch(`${server.url}www/samples/index.json`)).text()).samples.find((x) => x.name === 'mug');
+  await page.click('button[data-sample="mug"]');
+  await page.waitForFunction(() => /Object found|check the mask/.test(document.getElementById('mask-state').textContent), null, { timeout: 60000 });
+  for (let run = 0; run < 3; run += 1) {
+    await page.evaluate(() => delete document.body.dataset.fitted);
+    const t0 = Date.now();
+    await page.click('#fit-start');
+    await page.waitForFunction(() => document.body.dataset.fitted, null, { timeout: 600000 });
+    const seconds = (Date.now() - t0) / 1000;
+    const { iou } = await page.evaluate(
+      (truth) => {
+        const { client, REQUESTS, editor } = window.procfit;
+        return client.call(REQUESTS.IOU64, { a: { generator: editor.spec.name, params: editor.base }, b: { generator: truth.generator, params: truth.truth.params }, lod: 1, side: 128 });
+      },
+      truth,
+    );
+    fits.push({ seconds, iou });
+  }
+  await page.close();
+  console.log(`\nSample cup fit (Normal effort, ${threads} threads), 3 runs: median ${median(fits.map((f) => f.seconds)).toFixed(1)} s, IoU-64 vs truth median ${median(fits.map((f) => f.iou)).toFixed(3)} (runs: ${fits.map((f) => `${f.seconds.toFixed(1)} s / ${f.iou.toFixed(3)}`).join(', ')})`);
   console.log(`\nTime to interactive (navigation → first model frame), median of ${ttis.length}: ${median(ttis).toFixed(0)} ms\n`);
   console.log('Slider → new frame latency, medians in ms (headless Chromium, SwiftShader WebGL):\n');
   console.log('| detail | triangles | moves | latency | queued | worker | round trip | parse | frame |');

@@ -137,6 +137,14 @@ test('the fit runs with progress, draws its outline, and the editor gets the fit
   assert.notDeepEqual(after, before, 'the editor did not receive the fitted parameters');
   assert.equal(await page.inputValue('#preset'), 'fitted');
   console.log(`# sample mug fit (quick): ${seconds.toFixed(1)} s`);
+  // The GLB of a fitted model carries the photo's camera, and is still valid glTF.
+  const bytes = Buffer.from(await page.evaluate(() => Array.from(window.procfit.editor.glb.bytes)));
+  const jsonLength = bytes.readUInt32LE(12);
+  const gltf = JSON.parse(bytes.subarray(20, 20 + jsonLength).toString('utf8'));
+  assert.equal(gltf.cameras?.length, 1, 'the fitted GLB has no camera for the photo');
+  assert.ok(gltf.nodes.some((n) => n.camera === 0 && n.name === 'photo 1'));
+  const issues = await validate(bytes);
+  assert.equal(issues.numErrors, 0, JSON.stringify(issues.messages.slice(0, 5)));
   await screenshot(page, '02c-fitted');
 });
 
