@@ -142,8 +142,17 @@ fn real_generators_round_trip_to_identical_model_and_mesh() {
                 let mut model = Model::new(g.name(), &preset.values, lod).unwrap();
                 model.seed = Some(42);
                 let glb = export_model(&model, &[]).unwrap();
-                let back = import_glb(&glb).unwrap().model().unwrap();
+                let imported = import_glb(&glb).unwrap();
+                let back = imported.model().unwrap();
                 let what = format!("{} {} {lod:?}", g.name(), preset.name);
+                // One named node per part that has triangles, in part order.
+                let mesh = g.generate(&model.params, lod).unwrap();
+                let parts: Vec<&str> = (0..mesh.parts.len())
+                    .filter(|&p| mesh.tri_parts.iter().any(|&t| usize::from(t) == p))
+                    .map(|p| mesh.parts[p].name)
+                    .collect();
+                assert_eq!(imported.reference.part_names, parts, "{what}");
+                assert_eq!(imported.reference.triangles.len(), mesh.triangles.len());
                 assert_eq!(back.generator.name(), g.name(), "{what}");
                 assert_eq!(
                     back.params.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
@@ -570,6 +579,48 @@ fn bad_input_gives_clear_errors() {
         "required extension",
         &edited(&|j| j["extensionsRequired"] = json!(["KHR_draco_mesh_compression"])),
         "requires extension KHR_draco_mesh_compression",
+    );
+}
+
+#[test]
+fn json_chunk_padded_with_nuls_still_imports() {
+    let (_, glb) = lantern(Lod::Low);
+    let (j, bin) = take_apart(&glb);
+    let mut text = serde_json::to_vec(&j).unwrap();
+    text.resize(text.len().next_multiple_of(4) + 4, 0);
+    let padded = frame(&text, &bin);
+    let want = import_glb(&glb).unwrap();
+    let got = import_glb(&padded).unwrap();
+    assert_eq!(got.reference, want.reference);
+    assert_eq!(got.doc(), want.doc());
+}
+
+#[test]
+fn instancing_one_mesh_from_many_nodes_is_capped() {
+    // 70 000 triangles instanced from 61 nodes: 4.27 M triangles, past the 4 Mi cap.
+    let glb = write_glb(&strip(70_002), None, &[]).unwrap();
+    let bomb = edit_json(&glb, |j| {
+        let nodes = j["nodes"].as_array_mut().unwrap();
+        for _ in 0..60 {
+            nodes.push(json!({"mesh": 0}));
+        }
+        let n = nodes.len();
+        let scene = j["scenes"][0]["nodes"].as_array_mut().unwrap();
+        scene.extend((n - 60..n).map(|i| json!(i)));
+    });
+    check_err("instancing bomb", &bomb, "more than 4194304 triangles");
+    // Fewer instances import.
+    let fine = edit_json(&glb, |j| {
+        j["nodes"].as_array_mut().unwrap().push(json!({"mesh": 0}));
+        let n = j["nodes"].as_array().unwrap().len();
+        j["scenes"][0]["nodes"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!(n - 1));
+    });
+    assert_eq!(
+        import_glb(&fine).unwrap().reference.triangles.len(),
+        140_000
     );
 }
 

@@ -14,9 +14,10 @@ use json::validation::Checked::Valid;
 use std::borrow::Cow;
 use std::collections::HashMap;
 
-/// Most triangles (and vertices) an import produces, after node instancing: 16 Mi triangles is
-/// ~200 MB of indices, far beyond any model procfit fits or overlays.
-pub const MAX_TRIANGLES: usize = 1 << 24;
+/// Most triangles (and vertices) an import produces, after node instancing. A small hostile file
+/// can instance one mesh from thousands of nodes; 4 Mi triangles (~70 MB of geometry) is far
+/// beyond any model procfit fits or overlays and still fits a browser tab.
+pub const MAX_TRIANGLES: usize = 1 << 22;
 
 /// A triangle soup for evaluation and overlays: positions in world space (node transforms
 /// applied), exactly equal positions welded, triangles counter-clockwise seen from outside when
@@ -113,7 +114,12 @@ pub fn import_glb(bytes: &[u8]) -> Result<ImportedGlb, GlbError> {
             e.valid_up_to()
         ));
     }
-    let root = json::Root::from_slice(json_chunk)
+    // The chunk is padded with spaces; some writers pad with NULs, which JSON parsers reject.
+    let end = json_chunk
+        .iter()
+        .rposition(|&b| b != 0)
+        .map_or(0, |i| i + 1);
+    let root = json::Root::from_slice(&json_chunk[..end])
         .map_err(|e| GlbError::Malformed(format!("glTF JSON: {e}")))?;
     validate(&root)?;
 
@@ -345,6 +351,18 @@ impl Builder<'_> {
             else {
                 continue;
             };
+            // Refuse before reading when the declared sizes already exceed the cap.
+            let declared = |a: json::Index<json::Accessor>| {
+                self.root.accessors.get(a.value()).map_or(0, |a| a.count.0)
+            };
+            let declared_corners = primitive.indices.map_or(declared(pos_accessor), declared);
+            if (self.mesh.triangles.len() as u64).saturating_add(declared_corners / 3)
+                > MAX_TRIANGLES as u64
+            {
+                return Err(GlbError::TooLarge(format!(
+                    "more than {MAX_TRIANGLES} triangles after node instancing"
+                )));
+            }
             let positions = self.read_positions(pos_accessor.value(), &what)?;
             let indices = match primitive.indices {
                 Some(a) => self.read_indices(a.value(), positions.len(), &what)?,
@@ -638,4 +656,28 @@ pub fn import_obj(bytes: &[u8]) -> Result<ReferenceMesh, GlbError> {
     }
     mesh.part_names.push("obj".into());
     Ok(mesh)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use json::mesh::Mode;
+
+    #[test]
+    fn strips_and_fans_become_triangles_with_the_first_triangles_winding() {
+        let check = |mode, idx: &[u32], want: &[u32]| {
+            assert_eq!(triangulate(mode, idx), want, "{mode:?} {idx:?}");
+        };
+        check(Mode::Triangles, &[0, 1, 2, 3, 4], &[0, 1, 2]);
+        check(Mode::Triangles, &[], &[]);
+        check(
+            Mode::TriangleStrip,
+            &[0, 1, 2, 3, 4],
+            &[0, 1, 2, 1, 3, 2, 2, 3, 4],
+        );
+        check(Mode::TriangleStrip, &[5, 6], &[]);
+        check(Mode::TriangleFan, &[0, 1, 2, 3], &[1, 2, 0, 2, 3, 0]);
+        check(Mode::TriangleFan, &[7], &[]);
+        check(Mode::Lines, &[0, 1, 2], &[]);
+    }
 }
