@@ -116,6 +116,24 @@ impl Photo {
         })
     }
 
+    /// A photo from working-size RGBA pixels already made by this module (`rgba` must hold
+    /// `width × height × 4` bytes).
+    pub(super) fn from_parts(
+        width: u32,
+        height: u32,
+        rgba: Vec<u8>,
+        source_size: (u32, u32),
+    ) -> Photo {
+        let has_alpha = rgba.chunks_exact(4).any(|p| p[3] < 255);
+        Photo {
+            width,
+            height,
+            rgba,
+            has_alpha,
+            source_size,
+        }
+    }
+
     /// Width of the working image.
     pub fn width(&self) -> u32 {
         self.width

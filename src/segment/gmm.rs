@@ -20,11 +20,11 @@ pub type Rgb = [f32; 3];
 
 #[derive(Clone, Debug)]
 struct Component {
-    mean: [f64; 3],
+    mean: [f32; 3],
     /// Inverse covariance (row-major 3×3).
-    inv: [f64; 9],
+    inv: [f32; 9],
     /// log(weight) − ½ log det Σ − 3/2 log 2π: the constant part of the log density.
-    log_norm: f64,
+    log_norm: f32,
 }
 
 /// A Gaussian mixture over RGB colours.
@@ -112,7 +112,7 @@ impl Gmm {
 
     fn best_component(&self, c: &Rgb) -> usize {
         let mut best = 0;
-        let mut best_l = f64::NEG_INFINITY;
+        let mut best_l = f32::NEG_INFINITY;
         for (k, comp) in self.comps.iter().enumerate() {
             let l = comp.log_density(c);
             if l > best_l {
@@ -123,30 +123,31 @@ impl Gmm {
         best
     }
 
-    /// −log p(c): the data term D of GrabCut's energy (eq. 8–9).
+    /// −log p(c): the data term D of GrabCut's energy (eq. 8–9), with the sum over components
+    /// replaced by its largest term (as GrabCut's own implementation effectively does when it
+    /// assigns each pixel one component, eq. 8): off by at most log K, and no exp/log per pixel.
     pub fn nll(&self, c: &Rgb) -> f32 {
-        let mut m = f64::NEG_INFINITY;
-        let mut ls = [0.0f64; COMPONENTS];
-        for (k, comp) in self.comps.iter().enumerate() {
-            ls[k] = comp.log_density(c);
-            m = m.max(ls[k]);
+        let mut best = f32::NEG_INFINITY;
+        for comp in &self.comps {
+            best = best.max(comp.log_density(c));
         }
-        let s: f64 = ls[..self.comps.len()].iter().map(|l| (l - m).exp()).sum();
-        (-(m + s.ln())) as f32
+        -best
     }
 }
 
 impl Component {
-    fn log_density(&self, c: &Rgb) -> f64 {
+    fn log_density(&self, c: &Rgb) -> f32 {
         let d = [
-            f64::from(c[0]) - self.mean[0],
-            f64::from(c[1]) - self.mean[1],
-            f64::from(c[2]) - self.mean[2],
+            c[0] - self.mean[0],
+            c[1] - self.mean[1],
+            c[2] - self.mean[2],
         ];
         let i = &self.inv;
-        let q = d[0] * (i[0] * d[0] + i[1] * d[1] + i[2] * d[2])
-            + d[1] * (i[3] * d[0] + i[4] * d[1] + i[5] * d[2])
-            + d[2] * (i[6] * d[0] + i[7] * d[1] + i[8] * d[2]);
+        // Symmetric quadratic form: diagonal plus twice the upper triangle.
+        let q = d[0] * d[0] * i[0]
+            + d[1] * d[1] * i[4]
+            + d[2] * d[2] * i[8]
+            + 2.0 * (d[0] * d[1] * i[1] + d[0] * d[2] * i[2] + d[1] * d[2] * i[5]);
         self.log_norm - 0.5 * q
     }
 }
@@ -171,13 +172,13 @@ fn component(a: &Acc, total: f64) -> Option<Component> {
     let i11 = c00 * c22 - c02 * c02;
     let i12 = c01 * c02 - c00 * c12;
     let i22 = c00 * c11 - c01 * c01;
-    let inv = [i00, i01, i02, i01, i11, i12, i02, i12, i22].map(|v| v / det);
+    let inv = [i00, i01, i02, i01, i11, i12, i02, i12, i22].map(|v| (v / det) as f32);
     let weight = n / total;
     let log_norm = weight.ln() - 0.5 * det.ln() - 1.5 * (2.0 * std::f64::consts::PI).ln();
     Some(Component {
-        mean: m,
+        mean: m.map(|v| v as f32),
         inv,
-        log_norm,
+        log_norm: log_norm as f32,
     })
 }
 

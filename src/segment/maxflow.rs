@@ -32,6 +32,8 @@ pub struct Graph {
     next: Vec<u32>,
     /// Residual capacity of each arc.
     cap: Vec<f32>,
+    /// Capacities saved by [`Graph::save`].
+    cap0: Vec<f32>,
     /// Signed terminal residual: > 0 from the source, < 0 to the sink.
     tr: Vec<f32>,
     /// Arc from a node to its parent in its search tree, or `NONE`/`TERMINAL`/`ORPHAN`.
@@ -67,10 +69,29 @@ impl Graph {
         self.head.clear();
         self.next.clear();
         self.cap.clear();
+        self.cap0.clear();
         self.head.reserve(2 * edges);
         self.next.reserve(2 * edges);
         self.cap.reserve(2 * edges);
         self.flow = 0.0;
+    }
+
+    /// Remembers the arc capacities, so a later cut of the same graph with new terminal links
+    /// can skip rebuilding it ([`Graph::restore`]).
+    pub fn save(&mut self) {
+        self.cap0.clone_from(&self.cap);
+    }
+
+    /// Restores the saved arc capacities and clears terminal links and flow. Returns false
+    /// (and changes nothing) if nothing was saved since the last [`Graph::reset`].
+    pub fn restore(&mut self) -> bool {
+        if self.cap.is_empty() || self.cap0.len() != self.cap.len() {
+            return false;
+        }
+        self.cap.copy_from_slice(&self.cap0);
+        self.tr.fill(0.0);
+        self.flow = 0.0;
+        true
     }
 
     /// Number of nodes.
@@ -454,8 +475,16 @@ mod tests {
         assert!((g.maxflow() - 1.0).abs() < 1e-6);
         g.reset(2, 1);
         g.add_edge(0, 1, 2.0, 0.0);
+        g.save();
         g.add_tweights(0, 5.0, 0.0);
         g.add_tweights(1, 0.0, 5.0);
         assert!((g.maxflow() - 2.0).abs() < 1e-6);
+        // Restored: the edge has its full capacity again and the old terminal links are gone.
+        assert!(g.restore());
+        g.add_tweights(0, 0.5, 0.0);
+        g.add_tweights(1, 0.0, 5.0);
+        assert!((g.maxflow() - 0.5).abs() < 1e-6);
+        g.reset(2, 1);
+        assert!(!g.restore());
     }
 }

@@ -171,7 +171,7 @@ pub fn windows_from_strokes(
     })?;
     let nl = nlinks_of(&colors, w, h);
     let mut g = Graph::default();
-    cut_grid(&mut g, w, h, &nl, |i| {
+    cut_grid(&mut g, w, h, &nl, false, |i| {
         if !obj[i] || mark[i] == 2 {
             -HARD
         } else if mark[i] == 1 {
