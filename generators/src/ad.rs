@@ -302,10 +302,22 @@ impl Tape {
 }
 
 /// Runs `f` with a fresh tape on this thread and returns its result with the recorded tape.
-/// Re-entrant: a recording inside a recording gets its own tape and restores the outer one.
+/// Re-entrant: a recording inside a recording gets its own tape and restores the outer one,
+/// also when `f` unwinds.
 pub fn record<R>(f: impl FnOnce() -> R) -> (R, Tape) {
-    let outer = TAPE.with(|t| std::mem::take(&mut *t.borrow_mut()));
+    /// Puts the outer tape back when dropped, so a panic inside `f` cannot leave this thread
+    /// recording onto a stale tape.
+    struct Restore(Option<Vec<Node>>);
+    impl Drop for Restore {
+        fn drop(&mut self) {
+            if let Some(outer) = self.0.take() {
+                TAPE.with(|t| *t.borrow_mut() = outer);
+            }
+        }
+    }
+    let mut guard = Restore(Some(TAPE.with(|t| std::mem::take(&mut *t.borrow_mut()))));
     let r = f();
+    let outer = guard.0.take().unwrap_or_default();
     let nodes = TAPE.with(|t| std::mem::replace(&mut *t.borrow_mut(), outer));
     (r, Tape { nodes })
 }
@@ -425,6 +437,27 @@ mod tests {
                 g[k]
             );
         }
+    }
+
+    #[test]
+    fn nested_and_unwinding_recordings_restore_the_outer_tape() {
+        let ((inner_len, outer_var), outer) = record(|| {
+            let a = Var::input(1.0);
+            let b = a * a;
+            let (_, inner) = record(|| Var::input(2.0) * 3.0);
+            let caught = std::panic::catch_unwind(|| {
+                record(|| {
+                    let _ = Var::input(5.0) * 2.0;
+                    panic!("generator bug");
+                })
+            });
+            assert!(caught.is_err());
+            (inner.len(), b + a)
+        });
+        assert_eq!(inner_len, 2);
+        // Outer: a, b = a·a, b + a — nothing of the inner or the unwound recording.
+        assert_eq!(outer.len(), 3);
+        assert_eq!(outer_var.node(), Some(2));
     }
 
     #[test]

@@ -15,6 +15,8 @@ use glam::{DVec3, Vec2, Vec3};
 /// Face normals further apart than this (cosine of 75°) never smooth into each other, so a
 /// coarse level keeps its hard corners.
 pub const CREASE_COS: f64 = 0.2588;
+/// Cosine of half the crease angle (37.5°).
+const CREASE_HALF_COS: f64 = 0.7934;
 
 /// A point in space over scalar `S`.
 pub type P3<S> = [S; 3];
@@ -64,6 +66,67 @@ impl<S: Scalar> Builder<S> {
     pub fn quad(&mut self, q: [u32; 4], uv: [Vec2; 4], part: u8, group: u16) {
         self.tri([q[0], q[1], q[2]], [uv[0], uv[1], uv[2]], part, group);
         self.tri([q[0], q[2], q[3]], [uv[0], uv[2], uv[3]], part, group);
+    }
+
+    /// Adds a closed convex polyhedron: `corners` are its vertices, `faces` its planar faces as
+    /// corner-index loops, counter-clockwise seen from outside. Faces are fan-triangulated,
+    /// flat-shaded, and get planar UVs in the mesh's units (metres for buildings): u along the
+    /// face's first edge, v across it.
+    pub fn polyhedron(&mut self, corners: &[P3<S>], faces: &[&[usize]], part: u8) {
+        let first = self.pos.len() as u32;
+        for &c in corners {
+            self.vertex(c);
+        }
+        let val = |i: usize| {
+            DVec3::new(
+                corners[i][0].val(),
+                corners[i][1].val(),
+                corners[i][2].val(),
+            )
+        };
+        for face in faces {
+            let o = val(face[0]);
+            let t = (val(face[1]) - o).normalize_or_zero();
+            let n = (val(face[1]) - o).cross(val(face[2]) - o);
+            let bt = n.cross(t).normalize_or_zero();
+            let uv = |i: usize| {
+                let d = val(i) - o;
+                Vec2::new(d.dot(t) as f32, d.dot(bt) as f32)
+            };
+            for k in 1..face.len() - 1 {
+                let (a, b, c) = (face[0], face[k], face[k + 1]);
+                self.tri(
+                    [first + a as u32, first + b as u32, first + c as u32],
+                    [uv(a), uv(b), uv(c)],
+                    part,
+                    0,
+                );
+            }
+        }
+    }
+
+    /// Adds an axis-aligned box from `lo` to `hi` (every component of `hi` above `lo`).
+    pub fn cuboid(&mut self, lo: P3<S>, hi: P3<S>, part: u8) {
+        // Corner (i, j, k) picks lo/hi in x, y, z; index 4i + 2j + k.
+        let corners: [P3<S>; 8] = std::array::from_fn(|n| {
+            let pick = |bit: usize, axis: usize| {
+                if n >> bit & 1 == 1 {
+                    hi[axis]
+                } else {
+                    lo[axis]
+                }
+            };
+            [pick(2, 0), pick(1, 1), pick(0, 2)]
+        });
+        const FACES: [&[usize]; 6] = [
+            &[0, 1, 3, 2], // −X
+            &[4, 6, 7, 5], // +X
+            &[0, 4, 5, 1], // −Y
+            &[2, 3, 7, 6], // +Y
+            &[0, 2, 6, 4], // −Z
+            &[1, 5, 7, 3], // +Z
+        ];
+        self.polyhedron(&corners, &FACES, part);
     }
 
     /// The finished mesh (normals computed here) and the scalar positions.
@@ -122,12 +185,34 @@ fn corner_normals(p: &[DVec3], tris: &[[u32; 3]], groups: &[u16]) -> Vec<Vec3> {
             fill[i as usize] += 1;
         }
     }
+    // Fast path: a vertex whose faces all share one smoothing group and lie within half the
+    // crease angle of one of them is smooth all round (any two of its faces are then within
+    // the crease), so all its corners share one normal, computed once.
+    let smooth: Vec<Option<DVec3>> = (0..p.len())
+        .map(|v| {
+            let rows = &adj[start[v] as usize..start[v + 1] as usize];
+            let &first = rows.first()?;
+            let (g, r) = (groups[first as usize], unit[first as usize]);
+            let uniform = g != 0
+                && rows
+                    .iter()
+                    .all(|&o| groups[o as usize] == g && unit[o as usize].dot(r) > CREASE_HALF_COS);
+            uniform.then(|| {
+                rows.iter()
+                    .map(|&o| face[o as usize])
+                    .sum::<DVec3>()
+                    .normalize_or_zero()
+            })
+        })
+        .collect();
     let mut out = Vec::with_capacity(3 * tris.len());
     for (ti, t) in tris.iter().enumerate() {
         let g = groups[ti];
         for &v in t {
             let n = if g == 0 {
                 unit[ti]
+            } else if let Some(n) = smooth[v as usize] {
+                n
             } else {
                 let rows = &adj[start[v as usize] as usize..start[v as usize + 1] as usize];
                 rows.iter()

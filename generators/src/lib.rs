@@ -6,6 +6,11 @@
 //! eq. 2). Differentiable generators are written once over a scalar type so that the mesh and
 //! its Jacobian come from the same code.
 //!
+//! Modules: [`ad`] is the reverse-mode tape and the [`ad::Scalar`] trait generators are written
+//! over; [`build`] is the generic mesh builder and the glue that turns one generic build into
+//! `generate` and `generate_with_vjp`; [`dish`] and [`building`] are the two differentiable
+//! generators of the paper (§3.3, Algorithms 1 and 2).
+//!
 //! Conventions used by every generator:
 //! - Y is up, units are metres-like, the object stands on or around the origin.
 //! - Triangles are counter-clockwise seen from outside (outward normals by the right-hand rule).
@@ -18,6 +23,7 @@ use std::fmt;
 
 pub mod ad;
 pub mod build;
+pub mod building;
 pub mod dish;
 
 /// Level of detail, from the coarse mesh used during the fit to the export mesh.
@@ -304,7 +310,7 @@ pub trait Generator: Send + Sync {
 
 /// Every generator procfit knows, in the order the page lists them.
 pub fn all() -> Vec<&'static dyn Generator> {
-    vec![&dish::Dish]
+    vec![&dish::Dish, &building::Building]
 }
 
 /// The generator with this machine name.

@@ -454,3 +454,161 @@ fn regularizer_gradient_matches_finite_differences() {
         assert!(Dish.regularizer(&p).0 > base + 0.01, "{what}");
     }
 }
+
+/// Which vertices belong to the body (part 0).
+trait BodyVertices {
+    fn body_vertices(&self) -> Vec<bool>;
+}
+
+impl BodyVertices for procfit_generators::Mesh {
+    fn body_vertices(&self) -> Vec<bool> {
+        let mut body = vec![false; self.positions.len()];
+        for (t, &part) in self.triangles.iter().zip(&self.tri_parts) {
+            if part == 0 {
+                for &i in t {
+                    body[i as usize] = true;
+                }
+            }
+        }
+        body
+    }
+}
+
+#[test]
+fn handle_ends_sink_into_the_wall() {
+    // The centres of both end caps (the mesh's last two vertices, by construction) lie inside
+    // the outer wall at their height, whatever the body: the snap to the wall works for
+    // narrow, wide, flared and bulging bodies alike.
+    let handles = dish::handle_shapes();
+    for body in &dish::BODIES {
+        for h in &handles {
+            let p = dish::compose(body, Some(h));
+            let m = Dish.generate(&p, Lod::Medium).expect("generate");
+            let radial = |v: &glam::Vec3| v.x.hypot(v.z);
+            // The profile on the side away from the handle (the −X column, in creation order,
+            // pole to pole), and the outer wall radius at a height: the largest radius where
+            // the profile polyline crosses that height.
+            let column: Vec<glam::Vec3> = m
+                .positions
+                .iter()
+                .zip(&m.body_vertices())
+                .filter(|(v, body)| **body && v.x < 0.0 && v.z.abs() < 1e-6)
+                .map(|(v, _)| *v)
+                .collect();
+            let wall_r = |y: f32| {
+                column
+                    .windows(2)
+                    .filter(|w| (w[0].y - y) * (w[1].y - y) <= 0.0 && w[0].y != w[1].y)
+                    .map(|w| {
+                        let t = (y - w[0].y) / (w[1].y - w[0].y);
+                        radial(&w[0]) + t * (radial(&w[1]) - radial(&w[0]))
+                    })
+                    .fold(0.0f32, f32::max)
+            };
+            for end in &m.positions[m.positions.len() - 2..] {
+                assert!(
+                    radial(end) < wall_r(end.y) - 0.001,
+                    "{} + {}: end at {end} is outside the wall ({})",
+                    body.name,
+                    h.name,
+                    wall_r(end.y)
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn gradients_are_the_same_on_many_threads() {
+    // The tape is thread-local: generators recorded at once on several threads (as the
+    // optimiser's rayon population does) give exactly the single-threaded gradients.
+    let presets = Dish.presets();
+    let grad = |values: &[f64]| {
+        let (m, vjp) = Dish.generate_with_vjp(values, Lod::Low).expect("vjp");
+        let mut g = vec![0.0; values.len()];
+        vjp.vjp(
+            &vec![glam::Vec3::new(0.3, -0.2, 0.5); m.positions.len()],
+            &mut g,
+        )
+        .expect("vjp");
+        g
+    };
+    let serial: Vec<Vec<f64>> = presets.iter().map(|p| grad(&p.values)).collect();
+    let parallel: Vec<Vec<f64>> = std::thread::scope(|s| {
+        let handles: Vec<_> = presets
+            .iter()
+            .map(|p| {
+                s.spawn(|| {
+                    // Repeat so the threads' recordings overlap in time.
+                    let mut g = Vec::new();
+                    for _ in 0..5 {
+                        g = grad(&p.values);
+                    }
+                    g
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().expect("thread"))
+            .collect()
+    });
+    assert_eq!(serial, parallel);
+}
+
+#[test]
+fn mug_body_is_smooth_shaded_and_caps_are_flat() {
+    // The body has no crease sharper than the crease limit at MEDIUM, so every body vertex
+    // has one normal for all its corners; the handle's end caps are flat.
+    let m = Dish
+        .generate(&Dish.preset("mug").expect("mug").values, Lod::Medium)
+        .expect("generate");
+    let mut normal_of = vec![None; m.positions.len()];
+    for (t, tri) in m.triangles.iter().enumerate() {
+        for (k, &v) in tri.iter().enumerate() {
+            let n = m.corner_normals[3 * t + k];
+            if m.tri_parts[t] == 0 {
+                match normal_of[v as usize] {
+                    None => normal_of[v as usize] = Some(n),
+                    Some(o) => assert!(n.dot(o) > 0.9999, "vertex {v}: {n} vs {o}"),
+                }
+            }
+        }
+    }
+    // Cap triangles: every corner has the face normal.
+    let mut flat = 0;
+    for (t, tri) in m.triangles.iter().enumerate() {
+        let [a, b, c] = tri.map(|i| m.positions[i as usize]);
+        let face = (b - a).cross(c - a).normalize();
+        if m.tri_parts[t] == 1 && (0..3).all(|k| m.corner_normals[3 * t + k].dot(face) > 0.9999) {
+            flat += 1;
+        }
+    }
+    assert!(flat >= 2 * 12, "only {flat} flat handle triangles");
+}
+
+#[test]
+fn range_corners_give_valid_meshes() {
+    // Every parameter at its minimum, at its maximum, and alternating, at every level.
+    let spec = Dish.params();
+    let corners = [
+        spec.iter().map(|s| s.min).collect::<Vec<_>>(),
+        spec.iter().map(|s| s.max).collect(),
+        spec.iter()
+            .enumerate()
+            .map(|(i, s)| if i % 2 == 0 { s.min } else { s.max })
+            .collect(),
+        spec.iter()
+            .enumerate()
+            .map(|(i, s)| if i % 2 == 1 { s.min } else { s.max })
+            .collect(),
+    ];
+    for (c, p) in corners.iter().enumerate() {
+        for lod in Lod::ALL {
+            let m = Dish.generate(p, lod).expect("generate");
+            if let Err(e) = validate(&m) {
+                panic!("corner {c} {lod:?}: {e}");
+            }
+        }
+    }
+}

@@ -1,0 +1,1291 @@
+//! The building generator: paper §3.3, Algorithm 2. A block of flats, house, office or
+//! warehouse made of façade stripes, written once over [`Scalar`] so its continuous
+//! parameters get derivatives from the tape; discrete parameters (counts, stripe codes, roof
+//! type) choose the topology and have zero derivative, as in the paper.
+//!
+//! # Layout
+//! - **Front row** (along X, façades at z = ±depth/2): an end section, then (entrance section +
+//!   middle section) × (entrances − 1), an entrance section and the end section again. Each
+//!   section is a row of stripes; an end or middle stripe is coded wall / window / balcony
+//!   (`end_code_i`, `middle_code_i`); an entrance section is one stripe with the door. Stripe
+//!   widths are in metres per kind, so the length is their sum.
+//! - **Mirror symmetry** (paper: planes XY and YZ): sections right of the centre repeat their
+//!   stripes in reverse order and a middle section that sits on the centre is made palindromic,
+//!   so x → −x maps the building onto itself; the back façade mirrors the front (z → −z). The
+//!   side façades (x = ±length/2) are `side_code_i` stripes mirrored about z = 0.
+//! - **Vertical**: a plinth of `base_height`, `floors` × `floor_height`, an attic of
+//!   `top_height`; windows sit in every floor of window, balcony and entrance stripes (balcony
+//!   stripes get French windows, the entrance's ground floor the door); balconies from
+//!   `balcony_start_floor` up.
+//! - **Roof**: flat slab, gable (ridge along X) or hip, with `roof_overhang`, `roof_pitch` and a
+//!   fascia of `roof_base`.
+//!
+//! # Levels of detail
+//! - LOW: one box and the roof.
+//! - MEDIUM: a core box set back by `relief`, with plinth, attic and wall stripes filling the
+//!   façade layer, so window, balcony and entrance stripes read as recessed bands.
+//! - HIGH: adds glass plates, balcony slabs with solid front plates, the door and a block of
+//!   stairs.
+//! - ULTRA: window openings cut as alcoves (sill, lintel and piers per window), window frames
+//!   with `window_columns` × `window_rows` panes, balcony bars and rails, and stairs as steps.
+//!
+//! Every element is a closed box (or a closed convex roof polyhedron) of its part, so every
+//! part is watertight; elements of different parts may interpenetrate. Units are metres, façade
+//! UVs are planar in metres.
+
+use crate::ad::Scalar;
+use crate::build::{Builder, Model, P3, generate, generate_with_vjp};
+use crate::{GenError, Generator, Lod, Mesh, ParamKind, ParamSpec, Part, Preset, Vjp};
+
+/// The choices of a stripe code.
+pub const STRIPE_KINDS: &[&str] = &["wall", "window", "balcony"];
+/// The choices of `roof_type`.
+pub const ROOF_TYPES: &[&str] = &["flat", "gable", "hip"];
+/// Thickness of a glass pane.
+const GLASS: f64 = 0.02;
+/// Thickness of the door leaf.
+const DOOR: f64 = 0.05;
+/// Extra width of the stairs on each side of the door.
+const STAIRS_MARGIN: f64 = 0.3;
+
+/// Parameter indices, in vector order.
+pub mod idx {
+    /// Number of entrances (1–4).
+    pub const ENTRANCES: usize = 0;
+    /// Number of floors (1–10).
+    pub const FLOORS: usize = 1;
+    /// Stripes in an end section (1–5).
+    pub const END_STRIPES: usize = 2;
+    /// Stripes in a middle section (1–6).
+    pub const MIDDLE_STRIPES: usize = 3;
+    /// Stripes in half a side façade (1–4).
+    pub const SIDE_STRIPES: usize = 4;
+    /// First end-section stripe code (5 of them).
+    pub const END_CODE: usize = 5;
+    /// First middle-section stripe code (6 of them).
+    pub const MIDDLE_CODE: usize = 10;
+    /// First side stripe code (4 of them).
+    pub const SIDE_CODE: usize = 16;
+    /// First floor with balconies (0 = ground floor).
+    pub const BALCONY_START: usize = 20;
+    /// Window panes across (1–3).
+    pub const WINDOW_COLUMNS: usize = 21;
+    /// Window panes up (1–3).
+    pub const WINDOW_ROWS: usize = 22;
+    /// Bars per balcony.
+    pub const BALCONY_BARS: usize = 23;
+    /// Steps of the stairs.
+    pub const STAIR_STEPS: usize = 24;
+    /// Roof type (flat, gable, hip).
+    pub const ROOF_TYPE: usize = 25;
+    /// Storey height.
+    pub const FLOOR_HEIGHT: usize = 26;
+    /// Depth of the building (Z).
+    pub const DEPTH: usize = 27;
+    /// Plinth height.
+    pub const BASE_HEIGHT: usize = 28;
+    /// Attic height above the top floor.
+    pub const TOP_HEIGHT: usize = 29;
+    /// Width of a wall stripe.
+    pub const WALL_STRIPE_WIDTH: usize = 30;
+    /// Width of a window stripe.
+    pub const WINDOW_STRIPE_WIDTH: usize = 31;
+    /// Width of a balcony stripe.
+    pub const BALCONY_STRIPE_WIDTH: usize = 32;
+    /// Width of an entrance stripe.
+    pub const ENTRANCE_STRIPE_WIDTH: usize = 33;
+    /// Depth of the façade layer (window alcoves).
+    pub const RELIEF: usize = 34;
+    /// Window width / stripe width.
+    pub const WINDOW_WIDTH: usize = 35;
+    /// Window height / room above the sill.
+    pub const WINDOW_HEIGHT: usize = 36;
+    /// Sill height / floor height.
+    pub const WINDOW_SILL: usize = 37;
+    /// Width of frame bars.
+    pub const FRAME_WIDTH: usize = 38;
+    /// Depth of frame bars.
+    pub const FRAME_DEPTH: usize = 39;
+    /// Balcony width / stripe width.
+    pub const BALCONY_WIDTH: usize = 40;
+    /// How far a balcony sticks out.
+    pub const BALCONY_DEPTH: usize = 41;
+    /// Railing height.
+    pub const BALCONY_HEIGHT: usize = 42;
+    /// Balcony slab thickness.
+    pub const BALCONY_SLAB: usize = 43;
+    /// Bar and rail thickness.
+    pub const BAR_THICKNESS: usize = 44;
+    /// Door width / entrance stripe width.
+    pub const DOOR_WIDTH: usize = 45;
+    /// Door height.
+    pub const DOOR_HEIGHT: usize = 46;
+    /// How far the stairs reach out.
+    pub const STAIRS_DEPTH: usize = 47;
+    /// Roof pitch in degrees.
+    pub const ROOF_PITCH: usize = 48;
+    /// Roof overhang.
+    pub const ROOF_OVERHANG: usize = 49;
+    /// Roof fascia (slab) height.
+    pub const ROOF_BASE: usize = 50;
+    /// Number of parameters.
+    pub const COUNT: usize = 51;
+}
+
+const fn spec_entry(
+    name: &'static str,
+    label: &'static str,
+    group: &'static str,
+    unit: &'static str,
+    range: (f64, f64, f64),
+    kind: ParamKind,
+) -> ParamSpec {
+    ParamSpec {
+        name,
+        label,
+        group,
+        unit,
+        min: range.0,
+        max: range.1,
+        default: range.2,
+        kind,
+    }
+}
+
+const INT: ParamKind = ParamKind::Integer;
+const CONT: ParamKind = ParamKind::Continuous;
+const CODE: ParamKind = ParamKind::Categorical(STRIPE_KINDS);
+
+/// The parameter spec, in the order of [`idx`].
+pub static SPEC: [ParamSpec; idx::COUNT] = [
+    spec_entry(
+        "entrances",
+        "Entrances",
+        "Structure",
+        "",
+        (1.0, 4.0, 2.0),
+        INT,
+    ),
+    spec_entry("floors", "Floors", "Structure", "", (1.0, 10.0, 5.0), INT),
+    spec_entry(
+        "end_stripes",
+        "End section stripes",
+        "Structure",
+        "",
+        (1.0, 5.0, 2.0),
+        INT,
+    ),
+    spec_entry(
+        "middle_stripes",
+        "Middle section stripes",
+        "Structure",
+        "",
+        (1.0, 6.0, 3.0),
+        INT,
+    ),
+    spec_entry(
+        "side_stripes",
+        "Side stripes (half)",
+        "Structure",
+        "",
+        (1.0, 4.0, 2.0),
+        INT,
+    ),
+    spec_entry(
+        "end_code_0",
+        "End stripe 1",
+        "Stripes",
+        "",
+        (0.0, 2.0, 1.0),
+        CODE,
+    ),
+    spec_entry(
+        "end_code_1",
+        "End stripe 2",
+        "Stripes",
+        "",
+        (0.0, 2.0, 1.0),
+        CODE,
+    ),
+    spec_entry(
+        "end_code_2",
+        "End stripe 3",
+        "Stripes",
+        "",
+        (0.0, 2.0, 1.0),
+        CODE,
+    ),
+    spec_entry(
+        "end_code_3",
+        "End stripe 4",
+        "Stripes",
+        "",
+        (0.0, 2.0, 1.0),
+        CODE,
+    ),
+    spec_entry(
+        "end_code_4",
+        "End stripe 5",
+        "Stripes",
+        "",
+        (0.0, 2.0, 1.0),
+        CODE,
+    ),
+    spec_entry(
+        "middle_code_0",
+        "Middle stripe 1",
+        "Stripes",
+        "",
+        (0.0, 2.0, 1.0),
+        CODE,
+    ),
+    spec_entry(
+        "middle_code_1",
+        "Middle stripe 2",
+        "Stripes",
+        "",
+        (0.0, 2.0, 2.0),
+        CODE,
+    ),
+    spec_entry(
+        "middle_code_2",
+        "Middle stripe 3",
+        "Stripes",
+        "",
+        (0.0, 2.0, 1.0),
+        CODE,
+    ),
+    spec_entry(
+        "middle_code_3",
+        "Middle stripe 4",
+        "Stripes",
+        "",
+        (0.0, 2.0, 1.0),
+        CODE,
+    ),
+    spec_entry(
+        "middle_code_4",
+        "Middle stripe 5",
+        "Stripes",
+        "",
+        (0.0, 2.0, 1.0),
+        CODE,
+    ),
+    spec_entry(
+        "middle_code_5",
+        "Middle stripe 6",
+        "Stripes",
+        "",
+        (0.0, 2.0, 1.0),
+        CODE,
+    ),
+    spec_entry(
+        "side_code_0",
+        "Side stripe 1",
+        "Stripes",
+        "",
+        (0.0, 2.0, 1.0),
+        CODE,
+    ),
+    spec_entry(
+        "side_code_1",
+        "Side stripe 2",
+        "Stripes",
+        "",
+        (0.0, 2.0, 0.0),
+        CODE,
+    ),
+    spec_entry(
+        "side_code_2",
+        "Side stripe 3",
+        "Stripes",
+        "",
+        (0.0, 2.0, 1.0),
+        CODE,
+    ),
+    spec_entry(
+        "side_code_3",
+        "Side stripe 4",
+        "Stripes",
+        "",
+        (0.0, 2.0, 1.0),
+        CODE,
+    ),
+    spec_entry(
+        "balcony_start_floor",
+        "First balcony floor",
+        "Balconies",
+        "",
+        (0.0, 3.0, 1.0),
+        INT,
+    ),
+    spec_entry(
+        "window_columns",
+        "Window panes across",
+        "Windows",
+        "",
+        (1.0, 3.0, 2.0),
+        INT,
+    ),
+    spec_entry(
+        "window_rows",
+        "Window panes up",
+        "Windows",
+        "",
+        (1.0, 3.0, 1.0),
+        INT,
+    ),
+    spec_entry(
+        "balcony_bars",
+        "Balcony bars",
+        "Balconies",
+        "",
+        (3.0, 20.0, 8.0),
+        INT,
+    ),
+    spec_entry("stair_steps", "Steps", "Entrance", "", (1.0, 8.0, 3.0), INT),
+    spec_entry(
+        "roof_type",
+        "Roof type",
+        "Roof",
+        "",
+        (0.0, 2.0, 1.0),
+        ParamKind::Categorical(ROOF_TYPES),
+    ),
+    spec_entry(
+        "floor_height",
+        "Floor height",
+        "Size",
+        "m",
+        (2.4, 4.5, 2.8),
+        CONT,
+    ),
+    spec_entry("depth", "Depth", "Size", "m", (4.0, 20.0, 11.0), CONT),
+    spec_entry(
+        "base_height",
+        "Plinth height",
+        "Size",
+        "m",
+        (0.2, 1.5, 0.6),
+        CONT,
+    ),
+    spec_entry(
+        "top_height",
+        "Attic height",
+        "Size",
+        "m",
+        (0.1, 1.5, 0.4),
+        CONT,
+    ),
+    spec_entry(
+        "wall_stripe_width",
+        "Wall stripe width",
+        "Size",
+        "m",
+        (0.3, 3.0, 1.0),
+        CONT,
+    ),
+    spec_entry(
+        "window_stripe_width",
+        "Window stripe width",
+        "Size",
+        "m",
+        (0.8, 3.5, 2.4),
+        CONT,
+    ),
+    spec_entry(
+        "balcony_stripe_width",
+        "Balcony stripe width",
+        "Size",
+        "m",
+        (1.0, 4.5, 3.0),
+        CONT,
+    ),
+    spec_entry(
+        "entrance_stripe_width",
+        "Entrance stripe width",
+        "Size",
+        "m",
+        (1.5, 4.5, 2.6),
+        CONT,
+    ),
+    spec_entry(
+        "relief",
+        "Window recess",
+        "Windows",
+        "m",
+        (0.05, 0.5, 0.2),
+        CONT,
+    ),
+    spec_entry(
+        "window_width",
+        "Window width",
+        "Windows",
+        "",
+        (0.2, 0.9, 0.6),
+        CONT,
+    ),
+    spec_entry(
+        "window_height",
+        "Window height",
+        "Windows",
+        "",
+        (0.3, 1.0, 0.8),
+        CONT,
+    ),
+    spec_entry(
+        "window_sill",
+        "Sill height",
+        "Windows",
+        "",
+        (0.05, 0.5, 0.3),
+        CONT,
+    ),
+    spec_entry(
+        "frame_width",
+        "Frame width",
+        "Windows",
+        "m",
+        (0.02, 0.12, 0.06),
+        CONT,
+    ),
+    spec_entry(
+        "frame_depth",
+        "Frame depth",
+        "Windows",
+        "m",
+        (0.03, 0.15, 0.06),
+        CONT,
+    ),
+    spec_entry(
+        "balcony_width",
+        "Balcony width",
+        "Balconies",
+        "",
+        (0.5, 1.0, 0.9),
+        CONT,
+    ),
+    spec_entry(
+        "balcony_depth",
+        "Balcony depth",
+        "Balconies",
+        "m",
+        (0.4, 2.0, 1.1),
+        CONT,
+    ),
+    spec_entry(
+        "balcony_height",
+        "Railing height",
+        "Balconies",
+        "m",
+        (0.6, 1.3, 1.0),
+        CONT,
+    ),
+    spec_entry(
+        "balcony_slab",
+        "Balcony slab",
+        "Balconies",
+        "m",
+        (0.08, 0.3, 0.15),
+        CONT,
+    ),
+    spec_entry(
+        "bar_thickness",
+        "Bar thickness",
+        "Balconies",
+        "m",
+        (0.015, 0.06, 0.03),
+        CONT,
+    ),
+    spec_entry(
+        "door_width",
+        "Door width",
+        "Entrance",
+        "",
+        (0.3, 0.9, 0.55),
+        CONT,
+    ),
+    spec_entry(
+        "door_height",
+        "Door height",
+        "Entrance",
+        "m",
+        (1.8, 2.4, 2.1),
+        CONT,
+    ),
+    spec_entry(
+        "stairs_depth",
+        "Stairs depth",
+        "Entrance",
+        "m",
+        (0.3, 3.0, 1.2),
+        CONT,
+    ),
+    spec_entry(
+        "roof_pitch",
+        "Roof pitch",
+        "Roof",
+        "°",
+        (5.0, 60.0, 25.0),
+        CONT,
+    ),
+    spec_entry(
+        "roof_overhang",
+        "Roof overhang",
+        "Roof",
+        "m",
+        (0.0, 1.5, 0.4),
+        CONT,
+    ),
+    spec_entry(
+        "roof_base",
+        "Roof fascia",
+        "Roof",
+        "m",
+        (0.05, 0.8, 0.25),
+        CONT,
+    ),
+];
+
+/// Part ids, in the order of [`PARTS`].
+const WALL: u8 = 0;
+const GLASS_PART: u8 = 1;
+const FRAME: u8 = 2;
+const BALCONY: u8 = 3;
+const ROOF: u8 = 4;
+const DOOR_PART: u8 = 5;
+const STAIRS: u8 = 6;
+
+const PARTS: [Part; 7] = [
+    Part {
+        name: "wall",
+        color: [0.78, 0.72, 0.62, 1.0],
+    },
+    Part {
+        name: "window_glass",
+        color: [0.20, 0.28, 0.38, 1.0],
+    },
+    Part {
+        name: "window_frame",
+        color: [0.92, 0.92, 0.90, 1.0],
+    },
+    Part {
+        name: "balcony",
+        color: [0.55, 0.55, 0.57, 1.0],
+    },
+    Part {
+        name: "roof",
+        color: [0.45, 0.18, 0.14, 1.0],
+    },
+    Part {
+        name: "door",
+        color: [0.36, 0.22, 0.12, 1.0],
+    },
+    Part {
+        name: "stairs",
+        color: [0.60, 0.60, 0.60, 1.0],
+    },
+];
+
+/// What a stripe holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kind {
+    Wall,
+    Window,
+    Balcony,
+    Entrance,
+}
+
+impl Kind {
+    fn from_code(v: f64) -> Kind {
+        match v.round() as i64 {
+            0 => Kind::Wall,
+            2 => Kind::Balcony,
+            _ => Kind::Window,
+        }
+    }
+}
+
+/// The four façades; façade-local coordinates are `a` along it, `y` up and `d` outward from
+/// its plane.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Facade {
+    Front,
+    Back,
+    Right,
+    Left,
+}
+
+/// The stripe kinds of the front row, left to right, mirror-symmetric (see the module doc).
+fn front_row(p: &[f64]) -> Vec<Kind> {
+    let n = |i: usize| p[i].round().max(1.0) as usize;
+    let codes = |first: usize, count: usize| -> Vec<Kind> {
+        (0..count).map(|k| Kind::from_code(p[first + k])).collect()
+    };
+    let end = codes(idx::END_CODE, n(idx::END_STRIPES));
+    let middle = codes(idx::MIDDLE_CODE, n(idx::MIDDLE_STRIPES));
+    let entrances = n(idx::ENTRANCES);
+    // Sections: end, E, M, E, …, E, end — 2·entrances + 1 of them, the centre at `entrances`.
+    let count = 2 * entrances + 1;
+    let centre = entrances;
+    let mut row = Vec::new();
+    for s in 0..count {
+        let mut sec: Vec<Kind> = if s == 0 || s == count - 1 {
+            end.clone()
+        } else if s % 2 == 1 {
+            vec![Kind::Entrance]
+        } else {
+            middle.clone()
+        };
+        if s == centre {
+            let len = sec.len();
+            for k in len / 2..len {
+                sec[k] = sec[len - 1 - k];
+            }
+        } else if s > centre {
+            sec.reverse();
+        }
+        row.extend(sec);
+    }
+    row
+}
+
+/// The stripe kinds of a side façade along +Z, mirror-symmetric about z = 0.
+fn side_row(p: &[f64]) -> Vec<Kind> {
+    let k = p[idx::SIDE_STRIPES].round().max(1.0) as usize;
+    let half: Vec<Kind> = (0..k)
+        .map(|i| Kind::from_code(p[idx::SIDE_CODE + i]))
+        .collect();
+    half.iter().rev().chain(half.iter()).copied().collect()
+}
+
+/// The building generator.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Building;
+
+/// Everything derived from the parameters that the façade code needs.
+struct Ctx<'a, S> {
+    b: &'a mut Builder<S>,
+    p: &'a [S],
+    lod: Lod,
+    half_l: S,
+    half_d: S,
+    base: S,
+    fh: S,
+    floors: usize,
+    rel: S,
+}
+
+impl<S: Scalar> Ctx<'_, S> {
+    /// A box given in façade-local ranges (a, y, d).
+    fn fbox(&mut self, f: Facade, a: (S, S), y: (S, S), d: (S, S), part: u8) {
+        let (lo, hi) = match f {
+            Facade::Front => ([a.0, y.0, self.half_d + d.0], [a.1, y.1, self.half_d + d.1]),
+            Facade::Back => (
+                [a.0, y.0, -(self.half_d + d.1)],
+                [a.1, y.1, -(self.half_d + d.0)],
+            ),
+            Facade::Right => ([self.half_l + d.0, y.0, a.0], [self.half_l + d.1, y.1, a.1]),
+            Facade::Left => (
+                [-(self.half_l + d.1), y.0, a.0],
+                [-(self.half_l + d.0), y.1, a.1],
+            ),
+        };
+        self.b.cuboid(lo, hi, part);
+    }
+
+    /// One façade: plinth, attic and its stripes, on the mirrored pair `faces`.
+    fn facade(&mut self, faces: [Facade; 2], stripes: &[(S, S, Kind)], span: (S, S), top: S) {
+        let p = self.p;
+        let zero = S::cst(0.0);
+        let layer = (-self.rel, zero);
+        for f in faces {
+            self.fbox(f, span, (zero, self.base), layer, WALL);
+            self.fbox(f, span, (top, top + p[idx::TOP_HEIGHT]), layer, WALL);
+            for &(a0, a1, kind) in stripes {
+                if kind == Kind::Wall {
+                    self.fbox(f, (a0, a1), (self.base, top), layer, WALL);
+                    continue;
+                }
+                if self.lod >= Lod::High {
+                    for floor in 0..self.floors {
+                        self.cell(f, a0, a1, floor, kind);
+                    }
+                }
+            }
+        }
+    }
+
+    /// One floor of a window, balcony or entrance stripe at HIGH and ULTRA.
+    fn cell(&mut self, f: Facade, a0: S, a1: S, floor: usize, kind: Kind) {
+        let p = self.p;
+        let ultra = self.lod == Lod::Ultra;
+        let y0 = self.base + self.fh * floor as f64;
+        let y1 = y0 + self.fh;
+        let w = a1 - a0;
+        let mid = (a0 + a1) * 0.5;
+        let back = -self.rel;
+        let door =
+            kind == Kind::Entrance && floor == 0 && matches!(f, Facade::Front | Facade::Back);
+        // The opening: a door, a French window (balcony) or a window above its sill.
+        let (half_w, wb, wt) = if door {
+            // Kept below the floor above, so a lintel remains on low storeys.
+            let h = p[idx::DOOR_HEIGHT].smooth_min(self.fh * 0.9, 0.01);
+            (w * p[idx::DOOR_WIDTH] * 0.5, y0, y0 + h)
+        } else {
+            let sill = if kind == Kind::Balcony {
+                S::cst(0.02)
+            } else {
+                p[idx::WINDOW_SILL]
+            };
+            let wb = y0 + self.fh * sill;
+            let room = self.fh * 0.92 - self.fh * sill;
+            (
+                w * p[idx::WINDOW_WIDTH] * 0.5,
+                wb,
+                wb + room * p[idx::WINDOW_HEIGHT],
+            )
+        };
+        let (w0, w1) = (mid - half_w, mid + half_w);
+        if ultra {
+            // The alcove: wall around the opening, flush with the façade.
+            let layer = (back, S::cst(0.0));
+            if !door {
+                self.fbox(f, (a0, a1), (y0, wb), layer, WALL);
+            }
+            self.fbox(f, (a0, a1), (wt, y1), layer, WALL);
+            self.fbox(f, (a0, w0), (wb, wt), layer, WALL);
+            self.fbox(f, (w1, a1), (wb, wt), layer, WALL);
+        }
+        if door {
+            self.fbox(f, (w0, w1), (wb, wt), (back, back + DOOR), DOOR_PART);
+            self.stairs(f, w0, w1);
+        } else {
+            self.fbox(f, (w0, w1), (wb, wt), (back, back + GLASS), GLASS_PART);
+            if ultra {
+                self.frames(f, (w0, w1), (wb, wt));
+            }
+        }
+        let start = p[idx::BALCONY_START].val().round() as usize;
+        if kind == Kind::Balcony && floor >= start {
+            self.balcony(f, mid, w, y0);
+        }
+    }
+
+    /// Frame bars around a window and between its panes (ULTRA).
+    fn frames(&mut self, f: Facade, a: (S, S), y: (S, S)) {
+        let p = self.p;
+        // At most a quarter of the opening, so the bars never cross over on small windows.
+        let fw = p[idx::FRAME_WIDTH]
+            .smooth_min((a.1 - a.0) * 0.25, 0.005)
+            .smooth_min((y.1 - y.0) * 0.25, 0.005);
+        let d = (-self.rel, -self.rel + p[idx::FRAME_DEPTH]);
+        self.fbox(f, (a.0, a.0 + fw), y, d, FRAME);
+        self.fbox(f, (a.1 - fw, a.1), y, d, FRAME);
+        self.fbox(f, (a.0 + fw, a.1 - fw), (y.0, y.0 + fw), d, FRAME);
+        self.fbox(f, (a.0 + fw, a.1 - fw), (y.1 - fw, y.1), d, FRAME);
+        let cols = p[idx::WINDOW_COLUMNS].val().round() as usize;
+        for k in 1..cols {
+            let c = a.0 + (a.1 - a.0) * (k as f64 / cols as f64);
+            self.fbox(
+                f,
+                (c - fw * 0.5, c + fw * 0.5),
+                (y.0 + fw, y.1 - fw),
+                d,
+                FRAME,
+            );
+        }
+        let rows = p[idx::WINDOW_ROWS].val().round() as usize;
+        for k in 1..rows {
+            let c = y.0 + (y.1 - y.0) * (k as f64 / rows as f64);
+            self.fbox(
+                f,
+                (a.0 + fw, a.1 - fw),
+                (c - fw * 0.5, c + fw * 0.5),
+                d,
+                FRAME,
+            );
+        }
+    }
+
+    /// A balcony on the floor starting at `y0`: slab and front plate (HIGH) or slab, bars and
+    /// rails (ULTRA).
+    fn balcony(&mut self, f: Facade, mid: S, stripe_w: S, y0: S) {
+        let p = self.p;
+        let half = stripe_w * p[idx::BALCONY_WIDTH] * 0.5;
+        let (b0, b1) = (mid - half, mid + half);
+        let depth = p[idx::BALCONY_DEPTH];
+        let h = p[idx::BALCONY_HEIGHT];
+        let t = p[idx::BAR_THICKNESS];
+        let zero = S::cst(0.0);
+        self.fbox(
+            f,
+            (b0, b1),
+            (y0 - p[idx::BALCONY_SLAB], y0),
+            (-self.rel, depth),
+            BALCONY,
+        );
+        let front = (depth - t, depth);
+        if self.lod < Lod::Ultra {
+            self.fbox(f, (b0, b1), (y0, y0 + h), front, BALCONY);
+            return;
+        }
+        let rail = (y0 + h - t, y0 + h);
+        self.fbox(f, (b0, b1), rail, front, BALCONY);
+        self.fbox(f, (b0, b0 + t), rail, (zero, depth - t), BALCONY);
+        self.fbox(f, (b1 - t, b1), rail, (zero, depth - t), BALCONY);
+        let n = p[idx::BALCONY_BARS].val().round().max(1.0) as usize;
+        for k in 0..n {
+            let c = b0 + (b1 - b0) * ((k as f64 + 0.5) / n as f64);
+            self.fbox(
+                f,
+                (c - t * 0.5, c + t * 0.5),
+                (y0, y0 + h - t),
+                front,
+                BALCONY,
+            );
+        }
+    }
+
+    /// Stairs in front of a door from `w0` to `w1`: one block (HIGH) or steps (ULTRA).
+    fn stairs(&mut self, f: Facade, w0: S, w1: S) {
+        let p = self.p;
+        let a = (w0 - STAIRS_MARGIN, w1 + STAIRS_MARGIN);
+        let depth = p[idx::STAIRS_DEPTH];
+        let steps = if self.lod == Lod::Ultra {
+            p[idx::STAIR_STEPS].val().round().max(1.0) as usize
+        } else {
+            1
+        };
+        for k in 0..steps {
+            let y = self.base * ((k + 1) as f64 / steps as f64);
+            let d = depth * ((steps - k) as f64 / steps as f64);
+            self.fbox(f, a, (S::cst(0.0), y), (S::cst(0.0), d), STAIRS);
+        }
+    }
+}
+
+/// Lays stripes out from `start` with their widths; returns (a0, a1, kind) per stripe.
+fn lay_out<S: Scalar>(kinds: &[Kind], widths: &dyn Fn(Kind) -> S, start: S) -> Vec<(S, S, Kind)> {
+    let mut a = start;
+    kinds
+        .iter()
+        .map(|&k| {
+            let a1 = a + widths(k);
+            let s = (a, a1, k);
+            a = a1;
+            s
+        })
+        .collect()
+}
+
+/// The roof over the footprint `±half_l × ±half_d` at height `top`.
+fn roof<S: Scalar>(b: &mut Builder<S>, p: &[S], half_l: S, half_d: S, top: S) {
+    let oh = p[idx::ROOF_OVERHANG];
+    let (x, z) = (half_l + oh, half_d + oh);
+    let yb = top;
+    let yt = top + p[idx::ROOF_BASE];
+    let kind = p[idx::ROOF_TYPE].val().round() as usize;
+    if kind == 0 {
+        b.cuboid([-x, yb, -z], [x, yt, z], ROOF);
+        return;
+    }
+    let pitch = p[idx::ROOF_PITCH] * (std::f64::consts::PI / 180.0);
+    let rise = z * pitch.sin() / pitch.cos();
+    let yr = yt + rise;
+    let zero = S::cst(0.0);
+    // Ridge half-length: the whole length for a gable; for a hip, shortened by the run so the
+    // hips slope like the sides, kept positive (steeper hips) on short buildings.
+    let r = if kind == 1 {
+        x
+    } else {
+        (half_l - half_d).smooth_max(S::cst(0.1), 0.1)
+    };
+    let c: [P3<S>; 10] = [
+        [-x, yb, -z],
+        [x, yb, -z],
+        [x, yb, z],
+        [-x, yb, z],
+        [-x, yt, -z],
+        [x, yt, -z],
+        [x, yt, z],
+        [-x, yt, z],
+        [-r, yr, zero],
+        [r, yr, zero],
+    ];
+    let common: [&[usize]; 5] = [
+        &[0, 1, 2, 3], // bottom
+        &[3, 2, 6, 7], // front fascia
+        &[1, 0, 4, 5], // back fascia
+        &[7, 6, 9, 8], // front slope
+        &[5, 4, 8, 9], // back slope
+    ];
+    let mut faces: Vec<&[usize]> = common.to_vec();
+    if kind == 1 {
+        faces.push(&[2, 1, 5, 9, 6]); // right gable
+        faces.push(&[0, 3, 7, 8, 4]); // left gable
+    } else {
+        faces.extend_from_slice(&[&[2, 1, 5, 6], &[6, 5, 9], &[0, 3, 7, 4], &[4, 7, 8]]);
+    }
+    b.polyhedron(&c, &faces, ROOF);
+}
+
+impl Model for Building {
+    fn spec(&self) -> &[ParamSpec] {
+        &SPEC
+    }
+
+    fn parts(&self) -> &[Part] {
+        &PARTS
+    }
+
+    fn build<S: Scalar>(&self, p: &[S], lod: Lod) -> Result<Builder<S>, GenError> {
+        let pv: Vec<f64> = p.iter().map(|v| v.val()).collect();
+        let row = front_row(&pv);
+        let side = side_row(&pv);
+        let width = |k: Kind| match k {
+            Kind::Wall => p[idx::WALL_STRIPE_WIDTH],
+            Kind::Window => p[idx::WINDOW_STRIPE_WIDTH],
+            Kind::Balcony => p[idx::BALCONY_STRIPE_WIDTH],
+            Kind::Entrance => p[idx::ENTRANCE_STRIPE_WIDTH],
+        };
+        let length = row.iter().fold(S::cst(0.0), |s, &k| s + width(k));
+        let half_l = length * 0.5;
+        let half_d = p[idx::DEPTH] * 0.5;
+        let floors = pv[idx::FLOORS].round().max(1.0) as usize;
+        let fh = p[idx::FLOOR_HEIGHT];
+        let base = p[idx::BASE_HEIGHT];
+        let top = base + fh * floors as f64; // top of the last floor
+        let height = top + p[idx::TOP_HEIGHT];
+        let mut b = Builder::new();
+        let zero = S::cst(0.0);
+        if lod == Lod::Low {
+            b.cuboid([-half_l, zero, -half_d], [half_l, height, half_d], WALL);
+        } else {
+            let rel = p[idx::RELIEF];
+            b.cuboid(
+                [-half_l + rel, zero, -half_d + rel],
+                [half_l - rel, height, half_d - rel],
+                WALL,
+            );
+            let front = lay_out(&row, &width, -half_l);
+            // Side stripes share the depth in proportion to their kinds' widths.
+            let side_sum = side.iter().fold(S::cst(0.0), |s, &k| s + width(k));
+            let scale = p[idx::DEPTH] / side_sum;
+            let side_w = |k: Kind| width(k) * scale;
+            let sides = lay_out(&side, &side_w, -half_d);
+            let mut ctx = Ctx {
+                b: &mut b,
+                p,
+                lod,
+                half_l,
+                half_d,
+                base,
+                fh,
+                floors,
+                rel,
+            };
+            ctx.facade(
+                [Facade::Front, Facade::Back],
+                &front,
+                (-half_l, half_l),
+                top,
+            );
+            ctx.facade(
+                [Facade::Right, Facade::Left],
+                &sides,
+                (-half_d, half_d),
+                top,
+            );
+        }
+        roof(&mut b, p, half_l, half_d, height);
+        Ok(b)
+    }
+}
+
+/// A preset: the discrete layout and the continuous sizes, by name.
+fn preset(name: &'static str, label: &'static str, set: &[(usize, f64)]) -> Preset {
+    let mut values: Vec<f64> = SPEC.iter().map(|s| s.default).collect();
+    for &(i, v) in set {
+        values[i] = v;
+    }
+    Preset {
+        name,
+        label,
+        values,
+    }
+}
+
+impl Generator for Building {
+    fn name(&self) -> &'static str {
+        "building"
+    }
+    fn label(&self) -> &'static str {
+        "Building"
+    }
+    fn version(&self) -> u32 {
+        1
+    }
+    fn params(&self) -> &[ParamSpec] {
+        &SPEC
+    }
+
+    fn presets(&self) -> Vec<Preset> {
+        use idx::*;
+        let (wall, win, bal) = (0.0, 1.0, 2.0);
+        vec![
+            preset(
+                "panel_block",
+                "Five-storey panel block",
+                &[
+                    (ENTRANCES, 4.0),
+                    (FLOORS, 5.0),
+                    (END_STRIPES, 2.0),
+                    (END_CODE, win),
+                    (END_CODE + 1, win),
+                    (MIDDLE_STRIPES, 3.0),
+                    (MIDDLE_CODE, win),
+                    (MIDDLE_CODE + 1, bal),
+                    (MIDDLE_CODE + 2, win),
+                    (SIDE_STRIPES, 1.0),
+                    (SIDE_CODE, wall),
+                    (ROOF_TYPE, 0.0),
+                    (FLOOR_HEIGHT, 2.7),
+                    (DEPTH, 12.0),
+                    (RELIEF, 0.12),
+                    (WINDOW_STRIPE_WIDTH, 2.6),
+                    (BALCONY_STRIPE_WIDTH, 3.2),
+                ],
+            ),
+            preset(
+                "suburban_house",
+                "Two-storey house with a gable roof",
+                &[
+                    (ENTRANCES, 1.0),
+                    (FLOORS, 2.0),
+                    (END_STRIPES, 2.0),
+                    (END_CODE, wall),
+                    (END_CODE + 1, win),
+                    (SIDE_STRIPES, 1.0),
+                    (SIDE_CODE, win),
+                    (ROOF_TYPE, 1.0),
+                    (ROOF_PITCH, 38.0),
+                    (ROOF_OVERHANG, 0.5),
+                    (DEPTH, 8.0),
+                    (FLOOR_HEIGHT, 2.8),
+                    (WALL_STRIPE_WIDTH, 1.2),
+                    (WINDOW_STRIPE_WIDTH, 2.0),
+                    (BASE_HEIGHT, 0.5),
+                    (TOP_HEIGHT, 0.2),
+                    (STAIR_STEPS, 3.0),
+                ],
+            ),
+            preset(
+                "office_block",
+                "Eight-storey office block",
+                &[
+                    (ENTRANCES, 2.0),
+                    (FLOORS, 8.0),
+                    (END_STRIPES, 3.0),
+                    (END_CODE, win),
+                    (END_CODE + 1, win),
+                    (END_CODE + 2, win),
+                    (MIDDLE_STRIPES, 5.0),
+                    (MIDDLE_CODE, win),
+                    (MIDDLE_CODE + 1, win),
+                    (MIDDLE_CODE + 2, win),
+                    (MIDDLE_CODE + 3, win),
+                    (MIDDLE_CODE + 4, win),
+                    (SIDE_STRIPES, 3.0),
+                    (SIDE_CODE, win),
+                    (SIDE_CODE + 1, win),
+                    (SIDE_CODE + 2, win),
+                    (ROOF_TYPE, 0.0),
+                    (FLOOR_HEIGHT, 3.6),
+                    (DEPTH, 16.0),
+                    (WINDOW_STRIPE_WIDTH, 1.8),
+                    (WINDOW_WIDTH, 0.85),
+                    (WINDOW_HEIGHT, 0.95),
+                    (WINDOW_SILL, 0.1),
+                    (WINDOW_COLUMNS, 1.0),
+                    (RELIEF, 0.3),
+                    (TOP_HEIGHT, 1.2),
+                    (BASE_HEIGHT, 0.3),
+                    (STAIR_STEPS, 2.0),
+                ],
+            ),
+            preset(
+                "villa",
+                "Villa with a hip roof",
+                &[
+                    (ENTRANCES, 1.0),
+                    (FLOORS, 2.0),
+                    (END_STRIPES, 3.0),
+                    (END_CODE, win),
+                    (END_CODE + 1, bal),
+                    (END_CODE + 2, win),
+                    (SIDE_STRIPES, 2.0),
+                    (SIDE_CODE, win),
+                    (SIDE_CODE + 1, win),
+                    (ROOF_TYPE, 2.0),
+                    (ROOF_PITCH, 30.0),
+                    (ROOF_OVERHANG, 0.8),
+                    (BALCONY_START, 1.0),
+                    (DEPTH, 12.0),
+                    (FLOOR_HEIGHT, 3.2),
+                    (WINDOW_ROWS, 2.0),
+                    (BASE_HEIGHT, 0.9),
+                    (STAIR_STEPS, 5.0),
+                ],
+            ),
+            preset(
+                "tower",
+                "Ten-storey point tower",
+                &[
+                    (ENTRANCES, 1.0),
+                    (FLOORS, 10.0),
+                    (END_STRIPES, 3.0),
+                    (END_CODE, bal),
+                    (END_CODE + 1, win),
+                    (END_CODE + 2, wall),
+                    (SIDE_STRIPES, 2.0),
+                    (SIDE_CODE, bal),
+                    (SIDE_CODE + 1, win),
+                    (ROOF_TYPE, 0.0),
+                    (DEPTH, 16.0),
+                    (FLOOR_HEIGHT, 2.8),
+                    (WALL_STRIPE_WIDTH, 2.0),
+                    (TOP_HEIGHT, 1.4),
+                    (BALCONY_START, 1.0),
+                ],
+            ),
+            preset(
+                "warehouse",
+                "One-storey warehouse",
+                &[
+                    (ENTRANCES, 2.0),
+                    (FLOORS, 1.0),
+                    (END_STRIPES, 2.0),
+                    (END_CODE, wall),
+                    (END_CODE + 1, win),
+                    (MIDDLE_STRIPES, 4.0),
+                    (MIDDLE_CODE, wall),
+                    (MIDDLE_CODE + 1, win),
+                    (MIDDLE_CODE + 2, wall),
+                    (MIDDLE_CODE + 3, win),
+                    (SIDE_STRIPES, 2.0),
+                    (SIDE_CODE, wall),
+                    (SIDE_CODE + 1, win),
+                    (ROOF_TYPE, 1.0),
+                    (ROOF_PITCH, 12.0),
+                    (ROOF_OVERHANG, 0.3),
+                    (DEPTH, 18.0),
+                    (FLOOR_HEIGHT, 4.5),
+                    (WALL_STRIPE_WIDTH, 3.0),
+                    (WINDOW_STRIPE_WIDTH, 3.0),
+                    (WINDOW_SILL, 0.45),
+                    (WINDOW_HEIGHT, 0.5),
+                    (WINDOW_WIDTH, 0.8),
+                    (WINDOW_COLUMNS, 3.0),
+                    (ENTRANCE_STRIPE_WIDTH, 4.5),
+                    (DOOR_WIDTH, 0.8),
+                    (DOOR_HEIGHT, 2.4),
+                    (BASE_HEIGHT, 0.2),
+                    (STAIR_STEPS, 1.0),
+                    (STAIRS_DEPTH, 2.0),
+                ],
+            ),
+            preset(
+                "townhouse_row",
+                "Row of three townhouses",
+                &[
+                    (ENTRANCES, 3.0),
+                    (FLOORS, 3.0),
+                    (END_STRIPES, 1.0),
+                    (END_CODE, win),
+                    (MIDDLE_STRIPES, 2.0),
+                    (MIDDLE_CODE, win),
+                    (MIDDLE_CODE + 1, wall),
+                    (SIDE_STRIPES, 1.0),
+                    (SIDE_CODE, wall),
+                    (ROOF_TYPE, 1.0),
+                    (ROOF_PITCH, 45.0),
+                    (ROOF_OVERHANG, 0.2),
+                    (DEPTH, 10.0),
+                    (FLOOR_HEIGHT, 3.0),
+                    (WINDOW_HEIGHT, 0.9),
+                    (WINDOW_WIDTH, 0.5),
+                    (WINDOW_ROWS, 2.0),
+                    (BASE_HEIGHT, 0.8),
+                    (STAIR_STEPS, 4.0),
+                ],
+            ),
+        ]
+    }
+
+    fn differentiable(&self) -> bool {
+        true
+    }
+
+    fn generate(&self, params: &[f64], lod: Lod) -> Result<Mesh, GenError> {
+        generate(self, params, lod)
+    }
+
+    fn generate_with_vjp(
+        &self,
+        params: &[f64],
+        lod: Lod,
+    ) -> Result<(Mesh, Box<dyn Vjp>), GenError> {
+        generate_with_vjp(self, params, lod)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn index_constants_name_the_spec_entries() {
+        let pairs = [
+            (idx::ENTRANCES, "entrances"),
+            (idx::FLOORS, "floors"),
+            (idx::SIDE_STRIPES, "side_stripes"),
+            (idx::END_CODE, "end_code_0"),
+            (idx::MIDDLE_CODE, "middle_code_0"),
+            (idx::SIDE_CODE, "side_code_0"),
+            (idx::BALCONY_START, "balcony_start_floor"),
+            (idx::ROOF_TYPE, "roof_type"),
+            (idx::FLOOR_HEIGHT, "floor_height"),
+            (idx::RELIEF, "relief"),
+            (idx::BAR_THICKNESS, "bar_thickness"),
+            (idx::ROOF_BASE, "roof_base"),
+        ];
+        for (i, name) in pairs {
+            assert_eq!(SPEC[i].name, name);
+        }
+        for s in &SPEC {
+            assert!(s.min <= s.default && s.default <= s.max, "{}", s.name);
+        }
+    }
+
+    #[test]
+    fn rows_are_mirror_symmetric() {
+        for entrances in 1..=4 {
+            for middle in 1..=6 {
+                let mut p: Vec<f64> = SPEC.iter().map(|s| s.default).collect();
+                p[idx::ENTRANCES] = entrances as f64;
+                p[idx::MIDDLE_STRIPES] = middle as f64;
+                for k in 0..6 {
+                    p[idx::MIDDLE_CODE + k] = (k % 3) as f64;
+                }
+                let row = front_row(&p);
+                let rev: Vec<Kind> = row.iter().rev().copied().collect();
+                assert_eq!(row, rev, "{entrances} entrances, {middle} middle stripes");
+                assert_eq!(
+                    row.iter().filter(|k| **k == Kind::Entrance).count(),
+                    entrances
+                );
+            }
+        }
+    }
+}

@@ -1,0 +1,97 @@
+//! Contract tests over every registered generator: specs, presets and seeds are well formed,
+//! and the differentiable path builds exactly the mesh of the plain path.
+
+use procfit_generators::{Lod, all, by_name, sanitize_params};
+use std::collections::HashSet;
+
+#[test]
+fn registry_lists_dish_and_building_by_name() {
+    let names: Vec<&str> = all().iter().map(|g| g.name()).collect();
+    assert_eq!(
+        names.iter().collect::<HashSet<_>>().len(),
+        names.len(),
+        "{names:?}"
+    );
+    for n in ["dish", "building"] {
+        assert!(names.contains(&n), "{n} is not registered");
+        assert_eq!(by_name(n).map(|g| g.name()), Some(n));
+    }
+    assert!(by_name("teapot").is_none());
+}
+
+#[test]
+fn specs_presets_and_seeds_are_well_formed() {
+    for g in all() {
+        let mut seen = HashSet::new();
+        for s in g.params() {
+            assert!(seen.insert(s.name), "{}: duplicate `{}`", g.name(), s.name);
+            assert!(
+                s.name
+                    .chars()
+                    .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_'),
+                "{}: `{}` is not snake_case",
+                g.name(),
+                s.name
+            );
+            assert!(
+                s.min < s.max && (s.min..=s.max).contains(&s.default),
+                "{}",
+                s.name
+            );
+            assert!(!s.label.is_empty() && !s.group.is_empty(), "{}", s.name);
+        }
+        let presets = g.presets();
+        assert!(
+            presets.len() >= 6,
+            "{}: {} presets",
+            g.name(),
+            presets.len()
+        );
+        let mut names = HashSet::new();
+        for p in &presets {
+            assert!(
+                names.insert(p.name),
+                "{}: duplicate preset {}",
+                g.name(),
+                p.name
+            );
+            // Presets are already in range: sanitising changes nothing.
+            assert_eq!(
+                sanitize_params(g.params(), &p.values).as_ref(),
+                Ok(&p.values),
+                "{}",
+                p.name
+            );
+        }
+        for s in g.seeds() {
+            assert_eq!(
+                sanitize_params(g.params(), &s).as_ref(),
+                Ok(&s),
+                "{} seed",
+                g.name()
+            );
+        }
+    }
+}
+
+#[test]
+fn dish_and_building_are_differentiable() {
+    for n in ["dish", "building"] {
+        assert!(by_name(n).is_some_and(|g| g.differentiable()), "{n}");
+    }
+}
+
+#[test]
+fn generate_with_vjp_builds_the_same_mesh_as_generate() {
+    for g in all().into_iter().filter(|g| g.differentiable()) {
+        for p in g.presets() {
+            for lod in [Lod::Low, Lod::High] {
+                let plain = g.generate(&p.values, lod).expect("generate");
+                let (diff, _) = g
+                    .generate_with_vjp(&p.values, lod)
+                    .expect("generate_with_vjp");
+                assert_eq!(plain, diff, "{} {} {lod:?}", g.name(), p.name);
+            }
+        }
+    }
+}

@@ -1,0 +1,473 @@
+//! Tests of the building generator: gradients against finite differences, mesh validity,
+//! golden summaries per preset × level of detail, random parameter vectors, symmetry, bad
+//! input.
+
+mod common;
+
+use common::{Rng, check_gradient, random_params, validate};
+use procfit_generators::building::{Building, idx};
+use procfit_generators::{GenError, Generator, Lod};
+
+/// Gradient check of a preset at a level; `moving` is how many continuous parameters change
+/// the mesh there (a parameter that silently stops mattering is a regression too).
+fn check_grad(preset: &str, lod: Lod, moving: usize) {
+    let p = Building.preset(preset).expect("preset").values;
+    let got = check_gradient(&Building, &p, lod, &format!("{preset} {lod:?}"));
+    assert_eq!(
+        got, moving,
+        "{preset} {lod:?}: parameters that move the mesh"
+    );
+}
+
+#[test]
+fn vjp_matches_finite_differences_for_every_preset_at_two_lods() {
+    // Medium: sizes, relief and roof; Ultra adds windows, frames, doors, stairs, balconies.
+    // Parameters that do not move a preset: balcony sizes without balconies, the pitch of a
+    // flat roof, the wall-stripe width where no front stripe is a wall.
+    check_grad("panel_block", Lod::Medium, 10);
+    check_grad("panel_block", Lod::Ultra, 23);
+    check_grad("suburban_house", Lod::Medium, 11);
+    check_grad("suburban_house", Lod::Ultra, 19);
+    check_grad("office_block", Lod::Medium, 9);
+    check_grad("office_block", Lod::Ultra, 17);
+    check_grad("villa", Lod::Medium, 11);
+    check_grad("villa", Lod::Ultra, 24);
+    check_grad("tower", Lod::Medium, 11);
+    check_grad("tower", Lod::Ultra, 24);
+    check_grad("warehouse", Lod::Medium, 11);
+    check_grad("warehouse", Lod::Ultra, 19);
+    check_grad("townhouse_row", Lod::Medium, 11);
+    check_grad("townhouse_row", Lod::Ultra, 19);
+    // Every preset is covered above.
+    assert_eq!(Building.presets().len(), 7);
+}
+
+#[test]
+fn every_preset_and_lod_gives_a_valid_mesh() {
+    for preset in Building.presets() {
+        for lod in Lod::ALL {
+            let m = Building.generate(&preset.values, lod).expect("generate");
+            if let Err(e) = validate(&m) {
+                panic!("{} {lod:?}: {e}", preset.name);
+            }
+        }
+    }
+}
+
+#[test]
+fn random_in_range_parameters_give_valid_meshes() {
+    let mut rng = Rng(77);
+    for case in 0..300 {
+        let p = random_params(&Building, &mut rng);
+        let lod = Lod::ALL[case % 4];
+        let m = Building.generate(&p, lod).expect("generate");
+        if let Err(e) = validate(&m) {
+            panic!("case {case} {lod:?} {p:?}: {e}");
+        }
+    }
+}
+
+#[test]
+fn buildings_are_mirror_symmetric() {
+    // Every vertex has a mirror image in x and in z (paper: symmetry planes YZ and XY).
+    let key = |x: f32, y: f32, z: f32| {
+        (
+            (x * 1e3).round() as i64,
+            (y * 1e3).round() as i64,
+            (z * 1e3).round() as i64,
+        )
+    };
+    for preset in Building.presets() {
+        let m = Building
+            .generate(&preset.values, Lod::Ultra)
+            .expect("generate");
+        let set: std::collections::HashSet<_> =
+            m.positions.iter().map(|p| key(p.x, p.y, p.z)).collect();
+        for p in &m.positions {
+            assert!(
+                set.contains(&key(-p.x, p.y, p.z)),
+                "{}: no x-mirror of {p}",
+                preset.name
+            );
+            assert!(
+                set.contains(&key(p.x, p.y, -p.z)),
+                "{}: no z-mirror of {p}",
+                preset.name
+            );
+        }
+    }
+}
+
+#[test]
+fn every_part_appears_at_ultra() {
+    // The villa has windows, balconies, a door and stairs under a roof.
+    let m = Building
+        .generate(&Building.preset("villa").expect("villa").values, Lod::Ultra)
+        .expect("generate");
+    for (i, part) in m.parts.iter().enumerate() {
+        assert!(m.tri_parts.contains(&(i as u8)), "no {}", part.name);
+    }
+    // LOW is a box and a roof only.
+    let low = Building
+        .generate(&Building.preset("villa").expect("villa").values, Lod::Low)
+        .expect("generate");
+    assert!(
+        low.tri_parts
+            .iter()
+            .all(|&p| p == 0 || m.parts[usize::from(p)].name == "roof")
+    );
+}
+
+/// Vertex count, triangle count and bounding box (min, max) of a preset at a level.
+fn check(preset: &str, lod: Lod, verts: usize, tris: usize, lo: [f32; 3], hi: [f32; 3]) {
+    let p = Building.preset(preset).expect("preset").values;
+    let m = Building.generate(&p, lod).expect("generate");
+    let (blo, bhi) = m.bounds().expect("bounds");
+    let got = (
+        m.positions.len(),
+        m.triangles.len(),
+        blo.to_array(),
+        bhi.to_array(),
+    );
+    let close = |a: [f32; 3], b: [f32; 3]| a.iter().zip(&b).all(|(x, y)| (x - y).abs() < 1e-3);
+    assert!(
+        got.0 == verts && got.1 == tris && close(got.2, lo) && close(got.3, hi),
+        "{preset} {lod:?}: got {got:?}"
+    );
+}
+
+#[test]
+fn golden_summaries() {
+    // Regenerate only for an intended change of the mesh; a surprise here is a regression.
+    check(
+        "panel_block",
+        Lod::Low,
+        16,
+        24,
+        [-23.4000, 0.0000, -6.4000],
+        [23.4000, 14.7500, 6.4000],
+    );
+    check(
+        "panel_block",
+        Lod::Medium,
+        112,
+        168,
+        [-23.4000, 0.0000, -6.4000],
+        [23.4000, 14.7500, 6.4000],
+    );
+    check(
+        "panel_block",
+        Lod::High,
+        1920,
+        2880,
+        [-23.4000, 0.0000, -7.2000],
+        [23.4000, 14.7500, 7.2000],
+    );
+    check(
+        "panel_block",
+        Lod::Ultra,
+        15824,
+        23736,
+        [-23.4000, 0.0000, -7.2000],
+        [23.4000, 14.7500, 7.2000],
+    );
+    check(
+        "suburban_house",
+        Lod::Low,
+        18,
+        28,
+        [-5.0000, 0.0000, -4.5000],
+        [5.0000, 10.0658, 4.5000],
+    );
+    check(
+        "suburban_house",
+        Lod::Medium,
+        114,
+        172,
+        [-5.0000, 0.0000, -4.5000],
+        [5.0000, 10.0658, 4.5000],
+    );
+    check(
+        "suburban_house",
+        Lod::High,
+        290,
+        436,
+        [-5.0000, 0.0000, -5.2000],
+        [5.0000, 10.0658, 5.2000],
+    );
+    check(
+        "suburban_house",
+        Lod::Ultra,
+        1666,
+        2500,
+        [-5.0000, 0.0000, -5.2000],
+        [5.0000, 10.0658, 5.2000],
+    );
+    check(
+        "office_block",
+        Lod::Low,
+        16,
+        24,
+        [-12.9000, 0.0000, -8.4000],
+        [12.9000, 30.5500, 8.4000],
+    );
+    check(
+        "office_block",
+        Lod::Medium,
+        80,
+        120,
+        [-12.9000, 0.0000, -8.4000],
+        [12.9000, 30.5500, 8.4000],
+    );
+    check(
+        "office_block",
+        Lod::High,
+        2544,
+        3816,
+        [-12.9000, 0.0000, -9.2000],
+        [12.9000, 30.5500, 9.2000],
+    );
+    check(
+        "office_block",
+        Lod::Ultra,
+        21872,
+        32808,
+        [-12.9000, 0.0000, -9.2000],
+        [12.9000, 30.5500, 9.2000],
+    );
+    check(
+        "villa",
+        Lod::Low,
+        18,
+        28,
+        [-9.9000, 0.0000, -6.8000],
+        [9.9000, 11.8760, 6.8000],
+    );
+    check(
+        "villa",
+        Lod::Medium,
+        82,
+        124,
+        [-9.9000, 0.0000, -6.8000],
+        [9.9000, 11.8760, 6.8000],
+    );
+    check(
+        "villa",
+        Lod::High,
+        514,
+        772,
+        [-9.9000, 0.0000, -7.2000],
+        [9.9000, 11.8760, 7.2000],
+    );
+    check(
+        "villa",
+        Lod::Ultra,
+        4306,
+        6460,
+        [-9.9000, 0.0000, -7.2000],
+        [9.9000, 11.8760, 7.2000],
+    );
+    check(
+        "tower",
+        Lod::Low,
+        16,
+        24,
+        [-9.1000, 0.0000, -8.4000],
+        [9.1000, 30.2500, 8.4000],
+    );
+    check(
+        "tower",
+        Lod::Medium,
+        112,
+        168,
+        [-9.1000, 0.0000, -8.4000],
+        [9.1000, 30.2500, 8.4000],
+    );
+    check(
+        "tower",
+        Lod::High,
+        2720,
+        4080,
+        [-9.8000, 0.0000, -9.2000],
+        [9.8000, 30.2500, 9.2000],
+    );
+    check(
+        "tower",
+        Lod::Ultra,
+        21376,
+        32064,
+        [-9.8000, 0.0000, -9.2000],
+        [9.8000, 30.2500, 9.2000],
+    );
+    check(
+        "warehouse",
+        Lod::Low,
+        18,
+        28,
+        [-16.8000, 0.0000, -9.3000],
+        [16.8000, 7.3268, 9.3000],
+    );
+    check(
+        "warehouse",
+        Lod::Medium,
+        178,
+        268,
+        [-16.8000, 0.0000, -9.3000],
+        [16.8000, 7.3268, 9.3000],
+    );
+    check(
+        "warehouse",
+        Lod::High,
+        338,
+        508,
+        [-16.8000, 0.0000, -11.0000],
+        [16.8000, 7.3268, 11.0000],
+    );
+    check(
+        "warehouse",
+        Lod::Ultra,
+        1394,
+        2092,
+        [-16.8000, 0.0000, -11.0000],
+        [16.8000, 7.3268, 11.0000],
+    );
+    check(
+        "townhouse_row",
+        Lod::Low,
+        18,
+        28,
+        [-9.9000, 0.0000, -5.2000],
+        [9.9000, 15.6500, 5.2000],
+    );
+    check(
+        "townhouse_row",
+        Lod::Medium,
+        146,
+        220,
+        [-9.9000, 0.0000, -5.2000],
+        [9.9000, 15.6500, 5.2000],
+    );
+    check(
+        "townhouse_row",
+        Lod::High,
+        530,
+        796,
+        [-9.9000, 0.0000, -6.2000],
+        [9.9000, 15.6500, 6.2000],
+    );
+    check(
+        "townhouse_row",
+        Lod::Ultra,
+        3698,
+        5548,
+        [-9.9000, 0.0000, -6.2000],
+        [9.9000, 15.6500, 6.2000],
+    );
+}
+
+#[test]
+fn discrete_parameters_change_the_layout() {
+    let base = Building.preset("panel_block").expect("panel").values;
+    let count = |p: &[f64]| {
+        Building
+            .generate(p, Lod::Ultra)
+            .expect("generate")
+            .triangles
+            .len()
+    };
+    let n = count(&base);
+    for (i, v) in [
+        (idx::FLOORS, 6.0),
+        (idx::ENTRANCES, 3.0),
+        (idx::BALCONY_BARS, 12.0),
+        (idx::WINDOW_COLUMNS, 3.0),
+    ] {
+        let mut p = base.clone();
+        p[i] = v;
+        assert_ne!(count(&p), n, "parameter {i}");
+    }
+    // More floors make a taller building of the same floor height.
+    let mut p = base.clone();
+    p[idx::FLOORS] = 6.0;
+    let h = |p: &[f64]| {
+        Building
+            .generate(p, Lod::Low)
+            .expect("generate")
+            .bounds()
+            .expect("b")
+            .1
+            .y
+    };
+    assert!((h(&p) - h(&base) - 2.7).abs() < 1e-3);
+}
+
+#[test]
+fn bad_input_is_an_error_not_a_panic() {
+    let mut p = Building.defaults();
+    assert_eq!(
+        Building.generate(&p[..7], Lod::Low).err(),
+        Some(GenError::WrongLength {
+            expected: idx::COUNT,
+            got: 7
+        })
+    );
+    p[idx::DEPTH] = f64::NAN;
+    assert!(matches!(
+        Building.generate(&p, Lod::Low),
+        Err(GenError::NotFinite { name: "depth" })
+    ));
+    // Out of range and fractional counts are clamped and rounded.
+    let mut wild = Building.defaults();
+    wild[idx::FLOORS] = 99.4;
+    wild[idx::ROOF_TYPE] = -3.0;
+    let mut tame = Building.defaults();
+    tame[idx::FLOORS] = 10.0;
+    tame[idx::ROOF_TYPE] = 0.0;
+    assert_eq!(
+        Building.generate(&wild, Lod::High),
+        Building.generate(&tame, Lod::High)
+    );
+}
+
+#[test]
+fn buildings_are_flat_shaded() {
+    let m = Building
+        .generate(&Building.preset("villa").expect("villa").values, Lod::Ultra)
+        .expect("generate");
+    for (t, tri) in m.triangles.iter().enumerate() {
+        let [a, b, c] = tri.map(|i| m.positions[i as usize]);
+        let face = (b - a).cross(c - a).normalize();
+        for k in 0..3 {
+            assert!(
+                m.corner_normals[3 * t + k].dot(face) > 0.9999,
+                "triangle {t}"
+            );
+        }
+    }
+}
+
+#[test]
+fn range_corners_give_valid_meshes() {
+    // Every parameter at its minimum, at its maximum, and alternating, at every level.
+    let spec = Building.params();
+    let corners = [
+        spec.iter().map(|s| s.min).collect::<Vec<_>>(),
+        spec.iter().map(|s| s.max).collect(),
+        spec.iter()
+            .enumerate()
+            .map(|(i, s)| if i % 2 == 0 { s.min } else { s.max })
+            .collect(),
+        spec.iter()
+            .enumerate()
+            .map(|(i, s)| if i % 2 == 1 { s.min } else { s.max })
+            .collect(),
+    ];
+    for (c, p) in corners.iter().enumerate() {
+        for lod in Lod::ALL {
+            let m = Building.generate(p, lod).expect("generate");
+            if let Err(e) = validate(&m) {
+                panic!("corner {c} {lod:?}: {e}");
+            }
+        }
+    }
+}
