@@ -265,16 +265,54 @@ impl View {
     }
 
     /// Projects one object-space point: pixel position and depth (distance in front of the
-    /// camera along its −Z; ≤ 0 means behind).
+    /// camera along its −Z; ≤ 0 means behind). For many points use [`View::projector`].
     pub fn project(&self, p: Vec3) -> (DVec2, f64) {
+        self.projector().project(p)
+    }
+
+    /// The projection with its matrices precomputed, for projecting many points.
+    pub fn projector(&self) -> Projector {
         let r = self.params.rotation_and_derivatives()[0];
-        let w = self.params.translation + self.params.scale * (r * p.as_dvec3());
-        let c = self.pose.rotation.transpose() * (w - self.pose.position);
+        let rc_t = self.pose.rotation.transpose();
+        let h = f64::from(self.height);
+        Projector {
+            // c = Rcᵀ·(t + s·R·p − eye) = M·p + k
+            m: rc_t * (self.params.scale * r),
+            k: rc_t * (self.params.translation - self.pose.position),
+            f: self.focal(),
+            centre: DVec2::new(
+                0.5 * f64::from(self.width) + h * self.params.principal.x,
+                0.5 * h + h * self.params.principal.y,
+            ),
+        }
+    }
+}
+
+/// A [`View`]'s projection with its matrices precomputed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Projector {
+    m: DMat3,
+    k: DVec3,
+    f: f64,
+    centre: DVec2,
+}
+
+impl Projector {
+    /// Camera-space position of an object-space point.
+    pub fn to_camera(&self, p: Vec3) -> DVec3 {
+        self.m * p.as_dvec3() + self.k
+    }
+
+    /// Pixel position of a camera-space point (in front of the camera).
+    pub fn to_pixel(&self, c: DVec3) -> DVec2 {
         let z = -c.z;
-        let (f, h) = (self.focal(), f64::from(self.height));
-        let x = 0.5 * f64::from(self.width) + h * self.params.principal.x + f * c.x / z;
-        let y = 0.5 * h + h * self.params.principal.y - f * c.y / z;
-        (DVec2::new(x, y), z)
+        self.centre + DVec2::new(self.f * c.x / z, -self.f * c.y / z)
+    }
+
+    /// Pixel position and depth (see [`View::project`]).
+    pub fn project(&self, p: Vec3) -> (DVec2, f64) {
+        let c = self.to_camera(p);
+        (self.to_pixel(c), -c.z)
     }
 }
 

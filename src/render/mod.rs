@@ -30,7 +30,12 @@
 //! slot per item and the reductions run sequentially in a fixed order, so results are
 //! bit-identical with and without rayon.
 
+pub mod labels;
+pub mod multiview;
 pub mod testmesh;
+
+pub use labels::LabelRenderer;
+pub use multiview::MultiViewLoss;
 
 use crate::camera::{N_VIEW_PARAMS, View};
 use glam::{DVec2, DVec3, Vec3};
@@ -60,6 +65,9 @@ pub const MAX_SIDE: u32 = 8192;
 
 /// Distance (pixels) from a boundary point to where its outside winding number is sampled.
 const OUTSIDE_PROBE: f64 = 1e-4;
+
+/// Most visibility cuts kept within one pixel crossing of an edge.
+const MAX_CUTS: usize = 8;
 
 /// Edge structure of a triangle list: unique undirected edges and, per triangle, its three
 /// edges with their direction. Depends only on the indices, so a fit computes it once per
@@ -290,19 +298,10 @@ impl Renderer {
         let n = positions.len();
         self.screen.resize(n, DVec2::ZERO);
         self.cam.resize(n, DVec3::ZERO);
-        let r = view.params.rotation_and_derivatives()[0];
-        let (s, t) = (view.params.scale, view.params.translation);
-        let rc_t = view.pose.rotation.transpose();
-        let eye = view.pose.position;
-        let f = view.focal();
-        let h = f64::from(self.height);
-        let cx = 0.5 * f64::from(self.width) + h * view.params.principal.x;
-        let cy = 0.5 * h + h * view.params.principal.y;
+        let proj = view.projector();
         let one = |p: &Vec3, sc: &mut DVec2, cm: &mut DVec3| {
-            let c = rc_t * (t + s * (r * p.as_dvec3()) - eye);
-            let z = -c.z;
-            *cm = c;
-            *sc = DVec2::new(cx + f * c.x / z, cy - f * c.y / z);
+            *cm = proj.to_camera(*p);
+            *sc = proj.to_pixel(*cm);
         };
         if self.parallel {
             positions
@@ -319,7 +318,7 @@ impl Renderer {
         }
         // Clipping against the near plane is deliberately not supported: a fitted object is in
         // front of its camera, and a vertex behind it means the camera is inside the object.
-        let near = 1e-9 * (1.0 + eye.length());
+        let near = 1e-9 * (1.0 + view.pose.position.length());
         if let Some(i) = self
             .cam
             .iter()
@@ -513,12 +512,11 @@ impl Renderer {
         let hf = self.height as f64;
         self.row_start.clear();
         self.row_start.resize(h + 1, 0);
+        // Horizontal edges never change a winding number but can hide part of another edge,
+        // so they are registered too (for the visibility cuts).
         let span = |a: DVec2, b: DVec2| -> Option<(usize, usize)> {
-            if a.y == b.y {
-                return None;
-            }
             let (y0, y1) = (a.y.min(b.y).max(-1.0), a.y.max(b.y).min(hf + 1.0));
-            if y0 >= y1 {
+            if y0 > y1 {
                 return None;
             }
             let r0 = (y0.floor().max(0.0) as usize).min(h - 1);
@@ -656,6 +654,49 @@ impl EdgeCtx<'_> {
         w
     }
 
+    /// The parameters `t0 < cuts… < t1` where other silhouette edges cross `a + t·d` inside
+    /// pixel row `row`, sorted, written into `out`; returns how many were written. Beyond
+    /// [`MAX_CUTS`] crossings in one pixel the extra cuts are dropped (midpoint visibility).
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "hot inner helper over plain values"
+    )]
+    fn cuts(
+        &self,
+        e: &RemEdge,
+        a: DVec2,
+        d: DVec2,
+        t0: f64,
+        t1: f64,
+        row: usize,
+        out: &mut [f64; MAX_CUTS + 2],
+    ) -> usize {
+        out[0] = t0;
+        let mut n = 1;
+        for &k in &self.row_edges[self.row_start[row] as usize..self.row_start[row + 1] as usize] {
+            let o = self.rem[k as usize];
+            if o.a == e.a && o.b == e.b {
+                continue;
+            }
+            let c = self.screen[o.a as usize];
+            let f = self.screen[o.b as usize] - c;
+            let den = d.perp_dot(f);
+            if den == 0.0 {
+                continue;
+            }
+            let ac = c - a;
+            let t = ac.perp_dot(f) / den;
+            let u = ac.perp_dot(d) / den;
+            if t > t0 && t < t1 && (0.0..=1.0).contains(&u) && n <= MAX_CUTS {
+                out[n] = t;
+                n += 1;
+            }
+        }
+        out[1..n].sort_unstable_by(f64::total_cmp);
+        out[n] = t1;
+        n + 1
+    }
+
     /// `[∫ adj·(1 − t) dt, ∫ adj·t dt]` over the visible pixel crossings of one edge.
     fn integrate(&self, e: &RemEdge) -> [f64; 2] {
         let (a, b) = (self.screen[e.a as usize], self.screen[e.b as usize]);
@@ -710,10 +751,19 @@ impl EdgeCtx<'_> {
                 let px = (mid.x.floor().max(0.0) as usize).min(w - 1);
                 let py = (mid.y.floor().max(0.0) as usize).min(self.height as usize - 1);
                 let adj = f64::from(self.adjoint[py * w + px]);
-                if adj != 0.0 && self.winding(mid + probe) == 0 {
-                    let (l, sq) = (t1 - t0, 0.5 * (t1 * t1 - t0 * t0));
-                    ia += adj * (l - sq);
-                    ib += adj * sq;
+                if adj != 0.0 {
+                    // Visibility can only change where another silhouette edge crosses this
+                    // one: cut the crossing there and test each piece at its midpoint.
+                    let mut cuts = [0.0f64; MAX_CUTS + 2];
+                    let n = self.cuts(e, a, d, t0, t1, py, &mut cuts);
+                    for piece in cuts[..n].windows(2) {
+                        let (u0, u1) = (piece[0], piece[1]);
+                        if self.winding(a + d * (0.5 * (u0 + u1)) + probe) == 0 {
+                            let (l, sq) = (u1 - u0, 0.5 * (u1 * u1 - u0 * u0));
+                            ia += adj * (l - sq);
+                            ib += adj * sq;
+                        }
+                    }
                 }
             }
             if tx <= t1 {
