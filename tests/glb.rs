@@ -112,7 +112,7 @@ fn round_trip_keeps_generator_state_cameras_and_geometry_exactly() {
             for (a, b) in back.cameras.iter().zip(cameras()) {
                 assert_eq!(
                     a.name.as_deref(),
-                    Some(b.name.as_deref().unwrap_or("photo 1"))
+                    Some(b.name.as_deref().unwrap_or("photo_1"))
                 );
                 assert_eq!(
                     (a.yfov, a.aspect, a.znear, a.zfar),
@@ -142,8 +142,17 @@ fn real_generators_round_trip_to_identical_model_and_mesh() {
                 let mut model = Model::new(g.name(), &preset.values, lod).unwrap();
                 model.seed = Some(42);
                 let glb = export_model(&model, &[]).unwrap();
-                let back = import_glb(&glb).unwrap().model().unwrap();
+                let imported = import_glb(&glb).unwrap();
+                let back = imported.model().unwrap();
                 let what = format!("{} {} {lod:?}", g.name(), preset.name);
+                // One named node per part that has triangles, in part order.
+                let mesh = g.generate(&model.params, lod).unwrap();
+                let parts: Vec<&str> = (0..mesh.parts.len())
+                    .filter(|&p| mesh.tri_parts.iter().any(|&t| usize::from(t) == p))
+                    .map(|p| mesh.parts[p].name)
+                    .collect();
+                assert_eq!(imported.reference.part_names, parts, "{what}");
+                assert_eq!(imported.reference.triangles.len(), mesh.triangles.len());
                 assert_eq!(back.generator.name(), g.name(), "{what}");
                 assert_eq!(
                     back.params.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
@@ -165,11 +174,11 @@ fn real_generators_round_trip_to_identical_model_and_mesh() {
             }
         }
     }
-    // The generators room promises dish and building; an empty registry would make this test
-    // vacuous, so it counts.
+    // An empty registry would make this test vacuous.
+    let want: usize = all.iter().map(|g| 4 * g.presets().len()).sum();
     assert!(
-        checked >= 4 * all.len() && !all.is_empty() || all.is_empty(),
-        "checked {checked}"
+        checked > 0 && checked == want,
+        "checked {checked} of {want}"
     );
 }
 
@@ -179,7 +188,7 @@ fn file_structure_names_materials_cameras_and_extras() {
     let (j, bin) = take_apart(&glb);
     assert_eq!(j["asset"]["version"], "2.0");
     let scene = &j["scenes"][j["scene"].as_u64().unwrap() as usize];
-    assert_eq!(scene["name"], "test_prism");
+    assert_eq!(scene["name"], "test_prism_scene");
     // The extras are exactly params JSON.
     assert_eq!(scene["extras"]["generator"], "test_prism");
     assert_eq!(scene["extras"]["version"], 3);
@@ -199,7 +208,7 @@ fn file_structure_names_materials_cameras_and_extras() {
         .iter()
         .map(name)
         .collect();
-    assert_eq!(roots, ["test_prism", "IMG_0042.jpg", "photo 1"]);
+    assert_eq!(roots, ["test_prism", "IMG_0042.jpg", "photo_1"]);
     let object = &nodes[scene["nodes"][0].as_u64().unwrap() as usize];
     let parts: Vec<&str> = object["children"]
         .as_array()
@@ -569,7 +578,49 @@ fn bad_input_gives_clear_errors() {
     check_err(
         "required extension",
         &edited(&|j| j["extensionsRequired"] = json!(["KHR_draco_mesh_compression"])),
-        "invalid glTF",
+        "requires extension KHR_draco_mesh_compression",
+    );
+}
+
+#[test]
+fn json_chunk_padded_with_nuls_still_imports() {
+    let (_, glb) = lantern(Lod::Low);
+    let (j, bin) = take_apart(&glb);
+    let mut text = serde_json::to_vec(&j).unwrap();
+    text.resize(text.len().next_multiple_of(4) + 4, 0);
+    let padded = frame(&text, &bin);
+    let want = import_glb(&glb).unwrap();
+    let got = import_glb(&padded).unwrap();
+    assert_eq!(got.reference, want.reference);
+    assert_eq!(got.doc(), want.doc());
+}
+
+#[test]
+fn instancing_one_mesh_from_many_nodes_is_capped() {
+    // 70 000 triangles instanced from 61 nodes: 4.27 M triangles, past the 4 Mi cap.
+    let glb = write_glb(&strip(70_002), None, &[]).unwrap();
+    let bomb = edit_json(&glb, |j| {
+        let nodes = j["nodes"].as_array_mut().unwrap();
+        for _ in 0..60 {
+            nodes.push(json!({"mesh": 0}));
+        }
+        let n = nodes.len();
+        let scene = j["scenes"][0]["nodes"].as_array_mut().unwrap();
+        scene.extend((n - 60..n).map(|i| json!(i)));
+    });
+    check_err("instancing bomb", &bomb, "more than 4194304 triangles");
+    // Fewer instances import.
+    let fine = edit_json(&glb, |j| {
+        j["nodes"].as_array_mut().unwrap().push(json!({"mesh": 0}));
+        let n = j["nodes"].as_array().unwrap().len();
+        j["scenes"][0]["nodes"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!(n - 1));
+    });
+    assert_eq!(
+        import_glb(&fine).unwrap().reference.triangles.len(),
+        140_000
     );
 }
 
@@ -583,6 +634,21 @@ fn header_length_below_12_is_an_error_not_an_overflow() {
         b[8..12].copy_from_slice(&declared.to_le_bytes());
         check_err(&format!("declared {declared}"), &b, "too short");
     }
+}
+
+/// Regression: gltf-json 1.4.1's validation indexes the POSITION accessor without a bounds
+/// check; a dangling POSITION index panicked inside `validate` (found by `glb_fuzz`).
+#[test]
+fn dangling_position_accessor_is_an_error_not_a_panic_in_gltf_json() {
+    let (_, glb) = lantern(Lod::Low);
+    let bad = edit_json(&glb, |j| {
+        j["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = json!(4096)
+    });
+    check_err(
+        "dangling POSITION",
+        &bad,
+        "POSITION accessor 4096 does not exist",
+    );
 }
 
 #[test]

@@ -1,6 +1,8 @@
 //! Writes a GLB for every built-in generator's presets × levels of detail (plus the test prism
 //! with cameras and a mesh that needs u32 indices) and runs the Khronos glTF-Validator on them
-//! through `node tests/gltf_validate.mjs`: 0 errors and 0 warnings required.
+//! through `node tests/gltf_validate.mjs`: 0 errors and 0 warnings required; then loads them
+//! with three.js's GLTFLoader (`node tests/gltf_three.mjs`), which must find every named part and
+//! camera.
 //!
 //! Needs `node` and `npm ci` (for `node_modules/gltf-validator`). Where node is truly absent, set
 //! `PROCFIT_SKIP_NODE=1` to skip the validator run explicitly; otherwise a missing node fails.
@@ -57,7 +59,7 @@ fn write_all(dir: &Path) -> usize {
 }
 
 #[test]
-fn khronos_validator_reports_no_errors_and_no_warnings() {
+fn khronos_validator_and_three_js_accept_every_preset_and_lod() {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("glb-validate");
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
@@ -85,5 +87,24 @@ fn khronos_validator_reports_no_errors_and_no_warnings() {
     assert!(
         stdout.contains(&format!("**{n} files**")),
         "validator did not see all {n} files:\n{stdout}"
+    );
+
+    // The same files through three.js's GLTFLoader: every part and camera found by name.
+    let out = Command::new("node")
+        .arg(root.join("tests/gltf_three.mjs"))
+        .arg(&dir)
+        .current_dir(root)
+        .output()
+        .expect("`node` must be installed");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    println!("{stdout}");
+    assert!(
+        out.status.success(),
+        "three.js check failed:\n{stderr}\n{stdout}"
+    );
+    assert!(
+        stdout.contains(&format!("{n} files")) && stdout.contains(" 0 failed"),
+        "{stdout}"
     );
 }

@@ -8,7 +8,7 @@ use glam::{Mat4, Quat, Vec3};
 /// local −Z axis with +Y up and +X to the right of the image.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ExportCamera {
-    /// Node name; `None` gives `photo <i>`.
+    /// Node name; `None` gives `photo_<i>`.
     pub name: Option<String>,
     /// Vertical field of view in radians, in (0, π).
     pub yfov: f32,

@@ -2,7 +2,7 @@
 //! state, as one binary glTF 2.0 file.
 //!
 //! Layout of the file (every object named, so tools show the structure):
-//! - scene `<generator>` with the generator state in `extras` (same shape as params JSON);
+//! - scene `<generator>_scene` with the generator state in `extras` (same shape as params JSON);
 //! - root node `<generator>` whose children are one node per part (`body`, `handle`,
 //!   `window_glass`…), each with its own mesh (one triangle primitive) and PBR material;
 //! - one camera node per photo at the scene root, so moving the object does not move the
@@ -38,7 +38,7 @@ pub fn export_model(model: &Model, cameras: &[ExportCamera]) -> Result<Vec<u8>, 
 
 /// Writes `mesh` as a GLB. `doc`, when given, goes into the scene's `extras` so that the file can
 /// be opened again for editing (see [`super::ImportedGlb::model`]); `cameras` become perspective
-/// camera nodes named after them (or `photo <i>`).
+/// camera nodes named after them (or `photo_<i>`).
 pub fn write_glb(
     mesh: &Mesh,
     doc: Option<&ParamsDoc>,
@@ -89,7 +89,7 @@ pub fn write_glb(
 
     let mut scene_nodes = vec![object];
     for (i, camera) in cameras.iter().enumerate() {
-        let name = camera.name.clone().unwrap_or_else(|| format!("photo {i}"));
+        let name = camera.name.clone().unwrap_or_else(|| format!("photo_{i}"));
         let (rotation, translation) = camera.checked_pose(&format!("camera `{name}`"))?;
         let camera_index = root.push(json::Camera {
             name: Some(name.clone()),
@@ -124,7 +124,8 @@ pub fn write_glb(
     let scene = root.push(json::Scene {
         extensions: None,
         extras,
-        name: Some(title),
+        // Not the root node's name: three.js would rename one of two equal names.
+        name: Some(format!("{title}_scene")),
         nodes: scene_nodes,
     });
     root.scene = Some(scene);

@@ -14,9 +14,10 @@ use json::validation::Checked::Valid;
 use std::borrow::Cow;
 use std::collections::HashMap;
 
-/// Most triangles (and vertices) an import produces, after node instancing: 16 Mi triangles is
-/// ~200 MB of indices, far beyond any model procfit fits or overlays.
-pub const MAX_TRIANGLES: usize = 1 << 24;
+/// Most triangles (and vertices) an import produces, after node instancing. A small hostile file
+/// can instance one mesh from thousands of nodes; 4 Mi triangles (~70 MB of geometry) is far
+/// beyond any model procfit fits or overlays and still fits a browser tab.
+pub const MAX_TRIANGLES: usize = 1 << 22;
 
 /// A triangle soup for evaluation and overlays: positions in world space (node transforms
 /// applied), exactly equal positions welded, triangles counter-clockwise seen from outside when
@@ -113,7 +114,12 @@ pub fn import_glb(bytes: &[u8]) -> Result<ImportedGlb, GlbError> {
             e.valid_up_to()
         ));
     }
-    let root = json::Root::from_slice(json_chunk)
+    // The chunk is padded with spaces; some writers pad with NULs, which JSON parsers reject.
+    let end = json_chunk
+        .iter()
+        .rposition(|&b| b != 0)
+        .map_or(0, |i| i + 1);
+    let root = json::Root::from_slice(&json_chunk[..end])
         .map_err(|e| GlbError::Malformed(format!("glTF JSON: {e}")))?;
     validate(&root)?;
 
@@ -237,6 +243,28 @@ fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), GlbError> {
 /// Runs gltf-json's index and enum validation and reports the first few problems.
 fn validate(root: &json::Root) -> Result<(), GlbError> {
     use json::validation::Validate;
+    if let Some(ext) = root.extensions_required.first() {
+        return Err(GlbError::Unsupported(format!(
+            "the file requires extension {ext}, which procfit does not read (re-export it without compression or quantization)"
+        )));
+    }
+    // gltf-json 1.4.1's primitive validation indexes `accessors[POSITION]` without a bounds
+    // check and panics on a dangling index, so that index is checked first.
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let position = primitive
+                .attributes
+                .get(&Valid(json::mesh::Semantic::Positions));
+            if let Some(a) = position
+                && a.value() >= root.accessors.len()
+            {
+                return malformed(format!(
+                    "invalid glTF: mesh {m} primitive {p}: POSITION accessor {} does not exist",
+                    a.value()
+                ));
+            }
+        }
+    }
     let mut errors = Vec::new();
     root.validate(root, json::Path::new, &mut |path, error| {
         if errors.len() < 5 {
@@ -323,6 +351,18 @@ impl Builder<'_> {
             else {
                 continue;
             };
+            // Refuse before reading when the declared sizes already exceed the cap.
+            let declared = |a: json::Index<json::Accessor>| {
+                self.root.accessors.get(a.value()).map_or(0, |a| a.count.0)
+            };
+            let declared_corners = primitive.indices.map_or(declared(pos_accessor), declared);
+            if (self.mesh.triangles.len() as u64).saturating_add(declared_corners / 3)
+                > MAX_TRIANGLES as u64
+            {
+                return Err(GlbError::TooLarge(format!(
+                    "more than {MAX_TRIANGLES} triangles after node instancing"
+                )));
+            }
             let positions = self.read_positions(pos_accessor.value(), &what)?;
             let indices = match primitive.indices {
                 Some(a) => self.read_indices(a.value(), positions.len(), &what)?,
@@ -616,4 +656,28 @@ pub fn import_obj(bytes: &[u8]) -> Result<ReferenceMesh, GlbError> {
     }
     mesh.part_names.push("obj".into());
     Ok(mesh)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use json::mesh::Mode;
+
+    #[test]
+    fn strips_and_fans_become_triangles_with_the_first_triangles_winding() {
+        let check = |mode, idx: &[u32], want: &[u32]| {
+            assert_eq!(triangulate(mode, idx), want, "{mode:?} {idx:?}");
+        };
+        check(Mode::Triangles, &[0, 1, 2, 3, 4], &[0, 1, 2]);
+        check(Mode::Triangles, &[], &[]);
+        check(
+            Mode::TriangleStrip,
+            &[0, 1, 2, 3, 4],
+            &[0, 1, 2, 1, 3, 2, 2, 3, 4],
+        );
+        check(Mode::TriangleStrip, &[5, 6], &[]);
+        check(Mode::TriangleFan, &[0, 1, 2, 3], &[1, 2, 0, 2, 3, 0]);
+        check(Mode::TriangleFan, &[7], &[]);
+        check(Mode::Lines, &[0, 1, 2], &[]);
+    }
 }

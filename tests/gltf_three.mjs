@@ -1,0 +1,73 @@
+// Loads every .glb in a directory with three.js's GLTFLoader (in node: parsing needs no WebGL)
+// and checks that it finds what the file declares: every named mesh node as a three.js Mesh of
+// that name, every camera node as a PerspectiveCamera, and the generator state (scene extras) as
+// the scene's userData.
+//
+// Usage: node tests/gltf_three.mjs <dir>
+// Exits non-zero on a load failure, a missing part or camera, or an empty directory.
+
+import { readdirSync, readFileSync } from 'node:fs';
+import { join } from 'node:path';
+import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
+import { PropertyBinding } from 'three';
+
+const dir = process.argv[2];
+if (!dir) {
+  console.error('usage: node tests/gltf_three.mjs <dir-with-glb-files>');
+  process.exit(2);
+}
+const files = readdirSync(dir).filter((f) => f.endsWith('.glb')).sort();
+if (files.length === 0) {
+  console.error(`no .glb files in ${dir}`);
+  process.exit(1);
+}
+
+/** The JSON chunk of a GLB, parsed. */
+function gltfJson(bytes) {
+  const view = new DataView(bytes.buffer, bytes.byteOffset, bytes.byteLength);
+  const length = view.getUint32(12, true);
+  return JSON.parse(new TextDecoder().decode(bytes.subarray(20, 20 + length)));
+}
+
+const loader = new GLTFLoader();
+let failed = 0;
+let parts = 0;
+let cameras = 0;
+for (const file of files) {
+  const bytes = new Uint8Array(readFileSync(join(dir, file)));
+  const json = gltfJson(bytes);
+  const problems = [];
+  try {
+    const ab = bytes.buffer.slice(bytes.byteOffset, bytes.byteOffset + bytes.byteLength);
+    const gltf = await loader.parseAsync(ab, '');
+    const found = { Mesh: new Set(), PerspectiveCamera: new Set() };
+    gltf.scene.traverse((o) => found[o.type]?.add(o.name));
+    for (const node of json.nodes ?? []) {
+      // three.js sanitises node names for animation bindings (spaces become underscores).
+      const name = PropertyBinding.sanitizeNodeName(node.name ?? '');
+      if (node.mesh !== undefined) {
+        parts += 1;
+        if (!found.Mesh.has(name)) problems.push(`part "${node.name}" not found`);
+      }
+      if (node.camera !== undefined) {
+        cameras += 1;
+        if (!found.PerspectiveCamera.has(name)) problems.push(`camera "${node.name}" not found`);
+      }
+    }
+    if (gltf.cameras.length !== (json.cameras ?? []).length) {
+      problems.push(`${gltf.cameras.length} cameras loaded, ${(json.cameras ?? []).length} declared`);
+    }
+    const extras = json.scenes?.[json.scene ?? 0]?.extras;
+    if (extras && gltf.scene.userData.generator !== extras.generator) {
+      problems.push('generator state missing from the scene userData');
+    }
+  } catch (e) {
+    problems.push(`GLTFLoader failed: ${e?.message ?? e}`);
+  }
+  if (problems.length > 0) {
+    failed += 1;
+    console.error(`${file}: ${problems.join('; ')}`);
+  }
+}
+console.log(`three.js GLTFLoader: ${files.length} files, ${parts} parts, ${cameras} cameras, ${failed} failed`);
+process.exit(failed > 0 ? 1 : 0);
