@@ -1,1 +1,205 @@
 //! From photo to mask: decoding, orientation, downscaling and object segmentation.
+//!
+//! The paper leaves mask extraction to "any existing segmentation algorithm" (§3.1); this module
+//! is that algorithm, in pure Rust so the page needs no model download.
+//!
+//! Flow: bytes → [`Photo::decode`] (or [`Photo::from_rgba`] from a browser canvas) → an upright
+//! RGBA photo at working resolution → a [`Segmentation`] by one of four ways:
+//! 1. [`segment_alpha`]: the photo's own alpha channel;
+//! 2. [`segment_auto`]: border background model + GrabCut ([`grabcut::Session::automatic`]);
+//! 3. interactive: [`grabcut::Session::with_rect`], [`grabcut::Session::add_stroke`] and
+//!    [`grabcut::Session::recut`];
+//! 4. [`segment_mask_image`]: a mask image supplied by the user.
+//!
+//! Buildings get a second label, windows: [`windows::detect_windows`] finds darker rectangles
+//! inside the façade, [`windows::windows_from_strokes`] follows the user's strokes.
+//!
+//! Every way ends in the same [`Segmentation`]: a 0/1 object mask, the same with a
+//! [`Mask::DONT_CARE`] band along the outline (a couple of working pixels, where any
+//! segmentation is unsure), the bounding box and a confidence with human-readable warnings.
+//! Nothing here reads a clock: `std::time::Instant` panics on wasm32.
+
+pub mod decode;
+pub mod gmm;
+pub mod grabcut;
+pub mod maxflow;
+pub mod morph;
+pub mod windows;
+
+use std::fmt;
+
+pub use decode::{Photo, WORKING_SIDE};
+pub use grabcut::{Options, Session};
+
+use crate::mask::{Mask, MaskError};
+
+/// Why a photo or mask could not be processed; the message is meant for the user.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SegmentError(pub String);
+
+impl SegmentError {
+    fn new(msg: &str) -> SegmentError {
+        SegmentError(msg.to_owned())
+    }
+}
+
+impl fmt::Display for SegmentError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for SegmentError {}
+
+impl From<MaskError> for SegmentError {
+    fn from(e: MaskError) -> SegmentError {
+        SegmentError(e.0)
+    }
+}
+
+/// A pixel rectangle in the working image; `x1` and `y1` are exclusive.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BBox {
+    /// Left column.
+    pub x0: u32,
+    /// Top row.
+    pub y0: u32,
+    /// One past the right column.
+    pub x1: u32,
+    /// One past the bottom row.
+    pub y1: u32,
+}
+
+/// What a stroke marks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Label {
+    /// The object (or, for windows, a window).
+    Object,
+    /// The background (or, for windows, plain façade).
+    Background,
+}
+
+/// A user's brush stroke in working-image pixels.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Stroke {
+    /// What the painted pixels are.
+    pub label: Label,
+    /// Polyline vertices `[x, y]` (pixel centres are at `+0.5`).
+    pub points: Vec<[f32; 2]>,
+    /// Brush radius in pixels.
+    pub radius: f32,
+}
+
+/// A segmented object.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Segmentation {
+    /// 0/1 object mask, no don't-care pixels.
+    pub object: Mask,
+    /// The same with [`Mask::DONT_CARE`] in a band along the outline: what the fit should use.
+    pub mask: Mask,
+    /// Bounding box of the object, `None` if nothing was found.
+    pub bbox: Option<BBox>,
+    /// 0..1; for GrabCut the share of pixels where the cut agrees with the colour models alone,
+    /// capped at 0.4 when there are warnings.
+    pub confidence: f32,
+    /// Reasons not to trust the mask (empty when all looks fine).
+    pub warnings: Vec<String>,
+}
+
+impl Segmentation {
+    /// Whether the mask should be checked by the user before fitting.
+    pub fn is_low_confidence(&self) -> bool {
+        !self.warnings.is_empty() || self.confidence < 0.5
+    }
+}
+
+/// Automatic segmentation with default options.
+pub fn segment_auto(photo: &Photo) -> Result<Segmentation, SegmentError> {
+    Ok(Session::automatic(photo, &Options::default())?
+        .segmentation()
+        .clone())
+}
+
+/// Alpha below this is background, above [`ALPHA_OBJECT`] object, between don't care.
+const ALPHA_BACKGROUND: u8 = 16;
+const ALPHA_OBJECT: u8 = 240;
+
+/// The mask from the photo's alpha channel (a photo whose background was already removed):
+/// coverage α, hard object α ≥ ½, semi-transparent pixels don't care.
+pub fn segment_alpha(photo: &Photo) -> Result<Segmentation, SegmentError> {
+    if !photo.has_alpha() {
+        return Err(SegmentError::new(
+            "the photo has no transparency: its alpha channel cannot give a mask",
+        ));
+    }
+    let alpha: Vec<u8> = photo.rgba().chunks_exact(4).map(|p| p[3]).collect();
+    from_levels(photo.width(), photo.height(), &alpha, 1.0)
+}
+
+/// A mask from 8-bit levels: below 16 background, above 240 object, between don't care (so a
+/// saved [`Mask::to_luma8`] with its grey 128 band reads back as it was written).
+fn from_levels(
+    width: u32,
+    height: u32,
+    levels: &[u8],
+    confidence: f32,
+) -> Result<Segmentation, SegmentError> {
+    let (w, h) = (width as usize, height as usize);
+    let obj: Vec<bool> = levels.iter().map(|&a| a >= 128).collect();
+    let mut warnings = Vec::new();
+    let area = obj.iter().filter(|&&o| o).count();
+    if area == 0 {
+        warnings.push("the mask is empty".to_owned());
+    } else if area == obj.len() {
+        warnings.push("the mask covers the whole image".to_owned());
+    }
+    let mut seg = grabcut::build_segmentation(&obj, w, h, confidence, warnings)?;
+    let values: Vec<f32> = seg
+        .mask
+        .values()
+        .iter()
+        .zip(levels)
+        .map(|(&v, &a)| {
+            if (ALPHA_BACKGROUND..=ALPHA_OBJECT).contains(&a) {
+                Mask::DONT_CARE
+            } else {
+                v
+            }
+        })
+        .collect();
+    seg.mask = Mask::new(width, height, values)?;
+    if !seg.warnings.is_empty() {
+        seg.confidence = seg.confidence.min(0.4);
+    }
+    Ok(seg)
+}
+
+/// A user-supplied mask image (any decodable format) for `photo`: white (or opaque, if the
+/// image has transparency) is object, black background, mid grey don't care. It must have the
+/// photo's aspect ratio; it is resampled to the working size.
+pub fn segment_mask_image(photo: &Photo, bytes: &[u8]) -> Result<Segmentation, SegmentError> {
+    let (pw, ph) = (photo.width(), photo.height());
+    let m = Photo::decode(bytes, pw.max(ph).max(decode::MIN_SIDE))?;
+    let (mw, mh) = m.source_size();
+    let (sw, sh) = photo.source_size();
+    let aspect = |a: u32, b: u32| f64::from(a) / f64::from(b);
+    if (aspect(mw, mh) / aspect(sw, sh) - 1.0).abs() > 0.02 {
+        return Err(SegmentError(format!(
+            "the mask is {mw}×{mh} but the photo is {sw}×{sh}: their shapes differ"
+        )));
+    }
+    let (rgba, _) = decode::area_resample(m.rgba(), m.width(), m.height(), 4, pw, ph);
+    let levels: Vec<u8> = rgba
+        .chunks_exact(4)
+        .map(|p| {
+            if m.has_alpha() {
+                p[3]
+            } else {
+                // Rec. 601 luma.
+                ((u32::from(p[0]) * 299 + u32::from(p[1]) * 587 + u32::from(p[2]) * 114) / 1000)
+                    as u8
+            }
+        })
+        .collect();
+    from_levels(pw, ph, &levels, 1.0)
+}

@@ -1,0 +1,350 @@
+//! Photo decoding: JPEG/PNG/WebP bytes or browser RGBA → an upright RGBA photo at working size.
+//!
+//! Order matters for memory and time: the decoder is bounded by [`image::Limits`] and a pixel
+//! budget checked from the header *before* any pixel is decoded (a decompression bomb is refused,
+//! not allocated); the full-size image is then box-filtered (exact area weights) straight to the
+//! working resolution; EXIF orientation is applied last, on the small image, since rotation and
+//! area averaging commute.
+
+use image::{DynamicImage, ImageDecoder, ImageReader, Limits, RgbaImage, metadata::Orientation};
+
+use super::SegmentError;
+
+/// Default longest side of the working image (the paper's masks are of this order).
+pub const WORKING_SIDE: u32 = 512;
+
+/// Largest photo accepted, in pixels (a 50 MP phone photo fits, a decompression bomb does not).
+pub const MAX_PIXELS: u64 = 100_000_000;
+
+/// Largest side accepted by the decoder.
+pub const MAX_DECODE_SIDE: u32 = 30_000;
+
+/// Smallest side of a photo that can be segmented meaningfully.
+pub const MIN_SIDE: u32 = 8;
+
+/// An upright photo at working resolution, RGBA8, row-major, top row first.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Photo {
+    width: u32,
+    height: u32,
+    rgba: Vec<u8>,
+    has_alpha: bool,
+    source_size: (u32, u32),
+}
+
+impl Photo {
+    /// Decodes JPEG, PNG or WebP bytes, applies EXIF orientation and downscales so the longest
+    /// side is at most `working_side`.
+    pub fn decode(bytes: &[u8], working_side: u32) -> Result<Photo, SegmentError> {
+        check_working_side(working_side)?;
+        if bytes.is_empty() {
+            return Err(SegmentError::new("the file is empty"));
+        }
+        let reader = ImageReader::new(std::io::Cursor::new(bytes))
+            .with_guessed_format()
+            .map_err(|e| SegmentError(format!("cannot read the image: {e}")))?;
+        if reader.format().is_none() {
+            return Err(SegmentError::new(
+                "not a recognised image: expected JPEG, PNG or WebP",
+            ));
+        }
+        let mut reader = reader;
+        let mut limits = Limits::default();
+        limits.max_image_width = Some(MAX_DECODE_SIDE);
+        limits.max_image_height = Some(MAX_DECODE_SIDE);
+        limits.max_alloc = Some(4 * MAX_PIXELS + (64 << 20));
+        reader.limits(limits);
+        let mut decoder = reader
+            .into_decoder()
+            .map_err(|e| SegmentError(format!("cannot decode the image: {e}")))?;
+        let (w, h) = decoder.dimensions();
+        check_source_size(w, h)?;
+        // A broken EXIF block is not worth refusing the photo for: treat it as upright.
+        let orientation = decoder.orientation().unwrap_or(Orientation::NoTransforms);
+        let img = DynamicImage::from_decoder(decoder)
+            .map_err(|e| SegmentError(format!("cannot decode the image: {e}")))?;
+        let (tw, th) = target_size(w, h, working_side);
+        let (rgba, has_alpha) = match &img {
+            DynamicImage::ImageLuma8(b) => area_resample(b.as_raw(), w, h, 1, tw, th),
+            DynamicImage::ImageLumaA8(b) => area_resample(b.as_raw(), w, h, 2, tw, th),
+            DynamicImage::ImageRgb8(b) => area_resample(b.as_raw(), w, h, 3, tw, th),
+            DynamicImage::ImageRgba8(b) => area_resample(b.as_raw(), w, h, 4, tw, th),
+            // 16-bit and float images: convert to 8 bits first (rare, and PNG-sized).
+            other => area_resample(other.to_rgba8().as_raw(), w, h, 4, tw, th),
+        };
+        drop(img);
+        let small = RgbaImage::from_raw(tw, th, rgba)
+            .ok_or_else(|| SegmentError::new("internal: resampled buffer has the wrong size"))?;
+        let mut small = DynamicImage::ImageRgba8(small);
+        small.apply_orientation(orientation);
+        let (ow, oh) = (small.width(), small.height());
+        let swapped = ow != tw;
+        Ok(Photo {
+            width: ow,
+            height: oh,
+            rgba: small.into_rgba8().into_raw(),
+            has_alpha,
+            source_size: if swapped { (h, w) } else { (w, h) },
+        })
+    }
+
+    /// A photo from raw RGBA8 pixels (e.g. a canvas `ImageData` from the browser, already
+    /// upright), downscaled so the longest side is at most `working_side`.
+    pub fn from_rgba(
+        width: u32,
+        height: u32,
+        rgba: &[u8],
+        working_side: u32,
+    ) -> Result<Photo, SegmentError> {
+        check_working_side(working_side)?;
+        check_source_size(width, height)?;
+        let expected = width as usize * height as usize * 4;
+        if rgba.len() != expected {
+            return Err(SegmentError(format!(
+                "{} bytes for a {width}×{height} RGBA image (expected {expected})",
+                rgba.len()
+            )));
+        }
+        let (tw, th) = target_size(width, height, working_side);
+        let (rgba, has_alpha) = area_resample(rgba, width, height, 4, tw, th);
+        Ok(Photo {
+            width: tw,
+            height: th,
+            rgba,
+            has_alpha,
+            source_size: (width, height),
+        })
+    }
+
+    /// A photo from working-size RGBA pixels already made by this module (`rgba` must hold
+    /// `width × height × 4` bytes).
+    pub(super) fn from_parts(
+        width: u32,
+        height: u32,
+        rgba: Vec<u8>,
+        source_size: (u32, u32),
+    ) -> Photo {
+        let has_alpha = rgba.chunks_exact(4).any(|p| p[3] < 255);
+        Photo {
+            width,
+            height,
+            rgba,
+            has_alpha,
+            source_size,
+        }
+    }
+
+    /// Width of the working image.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Height of the working image.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// RGBA8 pixels of the working image.
+    pub fn rgba(&self) -> &[u8] {
+        &self.rgba
+    }
+
+    /// Whether the source had any pixel that is not fully opaque.
+    pub fn has_alpha(&self) -> bool {
+        self.has_alpha
+    }
+
+    /// Upright size of the source photo before downscaling.
+    pub fn source_size(&self) -> (u32, u32) {
+        self.source_size
+    }
+
+    /// Colours in `[0, 1]`, one per pixel.
+    pub fn colors(&self) -> Vec<[f32; 3]> {
+        self.rgba
+            .chunks_exact(4)
+            .map(|p| {
+                [
+                    f32::from(p[0]) / 255.0,
+                    f32::from(p[1]) / 255.0,
+                    f32::from(p[2]) / 255.0,
+                ]
+            })
+            .collect()
+    }
+}
+
+fn check_working_side(side: u32) -> Result<(), SegmentError> {
+    if !(MIN_SIDE..=4096).contains(&side) {
+        return Err(SegmentError(format!(
+            "working side {side} is outside {MIN_SIDE}..=4096"
+        )));
+    }
+    Ok(())
+}
+
+fn check_source_size(w: u32, h: u32) -> Result<(), SegmentError> {
+    if w == 0 || h == 0 {
+        return Err(SegmentError(format!("the image is empty ({w}×{h})")));
+    }
+    if w < MIN_SIDE || h < MIN_SIDE {
+        return Err(SegmentError(format!(
+            "the image is {w}×{h}: too small to segment (at least {MIN_SIDE}×{MIN_SIDE})"
+        )));
+    }
+    if u64::from(w) * u64::from(h) > MAX_PIXELS {
+        return Err(SegmentError(format!(
+            "the image claims {w}×{h} pixels, more than the {} MP limit \
+             (refused before decoding: a decompression bomb or an absurdly large photo)",
+            MAX_PIXELS / 1_000_000
+        )));
+    }
+    Ok(())
+}
+
+/// Working size: the longest side shrunk to `side` (never enlarged), aspect kept.
+fn target_size(w: u32, h: u32, side: u32) -> (u32, u32) {
+    let longest = w.max(h);
+    if longest <= side {
+        return (w, h);
+    }
+    let s = f64::from(side) / f64::from(longest);
+    let tw = ((f64::from(w) * s).round() as u32).max(1);
+    let th = ((f64::from(h) * s).round() as u32).max(1);
+    (tw, th)
+}
+
+/// Per output index, the source indices it covers and their area weights (sum 1).
+fn area_weights(src: u32, dst: u32) -> Vec<(usize, Vec<f32>)> {
+    let scale = f64::from(src) / f64::from(dst);
+    (0..dst)
+        .map(|o| {
+            let a = f64::from(o) * scale;
+            let b = (f64::from(o) + 1.0) * scale;
+            let first = a.floor() as usize;
+            let last = (b.ceil() as usize).min(src as usize);
+            let w: Vec<f32> = (first..last)
+                .map(|i| {
+                    let lo = a.max(i as f64);
+                    let hi = b.min(i as f64 + 1.0);
+                    ((hi - lo).max(0.0) / scale) as f32
+                })
+                .collect();
+            (first, w)
+        })
+        .collect()
+}
+
+/// Box filter with exact area weights from `ch`-channel 8-bit pixels to RGBA8, averaging colour
+/// premultiplied by alpha so transparent pixels' colour does not bleed into the object's edge.
+/// Returns the pixels and whether any source pixel had alpha below 255.
+pub fn area_resample(src: &[u8], w: u32, h: u32, ch: usize, tw: u32, th: u32) -> (Vec<u8>, bool) {
+    let to_rgba = |p: &[u8]| -> [f32; 4] {
+        match ch {
+            1 => [p[0].into(), p[0].into(), p[0].into(), 255.0],
+            2 => [p[0].into(), p[0].into(), p[0].into(), p[1].into()],
+            3 => [p[0].into(), p[1].into(), p[2].into(), 255.0],
+            _ => [p[0].into(), p[1].into(), p[2].into(), p[3].into()],
+        }
+    };
+    let has_alpha = match ch {
+        2 | 4 => src.chunks_exact(ch).any(|p| p[ch - 1] < 255),
+        _ => false,
+    };
+    let (w, h) = (w as usize, h as usize);
+    let (tw_, th_) = (tw as usize, th as usize);
+    if (tw_, th_) == (w, h) {
+        let mut out = Vec::with_capacity(w * h * 4);
+        for p in src.chunks_exact(ch) {
+            out.extend(to_rgba(p).map(|v| v as u8));
+        }
+        return (out, has_alpha);
+    }
+    let xw = area_weights(w as u32, tw);
+    let yw = area_weights(h as u32, th);
+    // Which output rows each source row feeds, with its weight.
+    let mut feeds: Vec<Vec<(usize, f32)>> = vec![Vec::new(); h];
+    for (oy, (first, ws)) in yw.iter().enumerate() {
+        for (k, &wt) in ws.iter().enumerate() {
+            feeds[first + k].push((oy, wt));
+        }
+    }
+    // Accumulators: premultiplied r, g, b and alpha per output pixel.
+    let mut acc = vec![0.0f32; tw_ * th_ * 4];
+    let mut row = vec![0.0f32; tw_ * 4];
+    for (y, feed) in feeds.iter().enumerate() {
+        if feed.is_empty() {
+            continue;
+        }
+        let line = &src[y * w * ch..(y + 1) * w * ch];
+        for (ox, (first, ws)) in xw.iter().enumerate() {
+            let mut s = [0.0f32; 4];
+            for (k, &wt) in ws.iter().enumerate() {
+                let x = first + k;
+                let p = to_rgba(&line[x * ch..x * ch + ch]);
+                let a = p[3] * wt;
+                s[0] += p[0] * a;
+                s[1] += p[1] * a;
+                s[2] += p[2] * a;
+                s[3] += a;
+            }
+            row[ox * 4..ox * 4 + 4].copy_from_slice(&s);
+        }
+        for &(oy, wt) in feed {
+            let dst = &mut acc[oy * tw_ * 4..(oy + 1) * tw_ * 4];
+            for (d, r) in dst.iter_mut().zip(&row) {
+                *d += r * wt;
+            }
+        }
+    }
+    let out = acc
+        .chunks_exact(4)
+        .flat_map(|p| {
+            let a = p[3];
+            let c = |v: f32| {
+                if a > 0.0 {
+                    (v / a).round().clamp(0.0, 255.0) as u8
+                } else {
+                    0
+                }
+            };
+            [c(p[0]), c(p[1]), c(p[2]), a.round().clamp(0.0, 255.0) as u8]
+        })
+        .collect();
+    (out, has_alpha)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn area_resample_averages_exactly() {
+        // 4×2 RGB: left half black, right half white → 2×1 gives black and white; 3×1 gives grey
+        // in the middle with exact third weights.
+        let mut src = Vec::new();
+        for _ in 0..2 {
+            for x in 0..4 {
+                let v = if x < 2 { 0 } else { 255 };
+                src.extend([v, v, v]);
+            }
+        }
+        let (out, alpha) = area_resample(&src, 4, 2, 3, 2, 1);
+        assert_eq!(out, vec![0, 0, 0, 255, 255, 255, 255, 255]);
+        assert!(!alpha);
+        let (out, _) = area_resample(&src, 4, 2, 3, 3, 1);
+        assert_eq!(&out[4..8], &[128, 128, 128, 255]);
+        // Transparent red next to opaque green: colour stays green, alpha halves.
+        let src = [255, 0, 0, 0, 0, 255, 0, 255];
+        let (out, alpha) = area_resample(&src, 2, 1, 4, 1, 1);
+        assert_eq!(out, vec![0, 255, 0, 128]);
+        assert!(alpha);
+    }
+
+    #[test]
+    fn target_size_keeps_aspect_and_never_enlarges() {
+        assert_eq!(target_size(4000, 3000, 512), (512, 384));
+        assert_eq!(target_size(3000, 4000, 512), (384, 512));
+        assert_eq!(target_size(100, 50, 512), (100, 50));
+    }
+}

@@ -1,0 +1,745 @@
+//! GrabCut-style segmentation (Rother, Kolmogorov & Blake 2004): colour mixtures for object and
+//! background, a contrast-sensitive smoothness term, and an exact min-cut, iterated.
+//!
+//! A [`Session`] owns everything a re-cut needs (colours, n-link weights, colour models, the
+//! user's hard constraints, the graph's buffers), so an interactive edit — a rectangle or a
+//! stroke — costs [`Options::recut_iterations`] colour fits and cuts starting from the previous
+//! labelling, not a new segmentation (the max-flow itself restarts from zero flow).
+//!
+//! Automatic mode replaces GrabCut's user rectangle by a background model learnt from the image
+//! border. The object may touch one border (it stands on a table or the floor): each side of the
+//! border is tested against a model of the other three, and a side whose colours the others do
+//! not explain gets no hard background constraint and lends only its explained pixels to the
+//! border model.
+
+use super::decode::area_resample;
+use super::gmm::{Gmm, Rgb};
+use super::maxflow::Graph;
+use super::morph;
+use super::{BBox, Label, Photo, SegmentError, Segmentation, Stroke};
+use crate::mask::Mask;
+
+/// Photos with at least this many pixels are first segmented at half size (coarse to fine);
+/// the half-size image then has at least 160×120 pixels.
+const COARSE_MIN_PIXELS: usize = 4 * 160 * 120;
+/// Smoothness weight γ of GrabCut's energy (eq. 11; the paper's value).
+const GAMMA: f32 = 50.0;
+/// Capacity of a hard constraint: larger than any cut through a pixel's eight n-links.
+pub(super) const HARD: f32 = 1.0e6;
+/// Largest number of samples used to fit one colour model (the rest adds time, not accuracy).
+const MAX_SAMPLES: usize = 12_000;
+/// Fraction of a border side's pixels that the other sides must fail to explain for the side to
+/// count as touched by the object.
+const TOUCH_FRACTION: f32 = 0.12;
+/// Percentile of the border pixels' own negative log-likelihood above which a pixel's colour is
+/// "not seen on the border".
+const BORDER_PERCENTILE: f32 = 0.97;
+
+/// Extra negative log-likelihood allowed when deciding that a colour matches a stroke's.
+const STROKE_MARGIN: f32 = 6.0;
+
+const NONE: u8 = 0;
+const HARD_FG: u8 = 1;
+const HARD_BG: u8 = 2;
+/// Background painted by a user stroke (a statement about its colour too, unlike the border
+/// ring or the outside of a rectangle).
+const STROKE_BG: u8 = 3;
+
+fn is_bg(h: u8) -> bool {
+    h == HARD_BG || h == STROKE_BG
+}
+
+/// Options of automatic segmentation.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Options {
+    /// GrabCut iterations (colour refit + cut) in automatic mode.
+    pub iterations: usize,
+    /// Iterations per interactive re-cut.
+    pub recut_iterations: usize,
+}
+
+impl Default for Options {
+    fn default() -> Options {
+        Options {
+            iterations: 4,
+            recut_iterations: 2,
+        }
+    }
+}
+
+/// An automatic or interactive segmentation of one photo, kept for re-cuts.
+#[derive(Clone, Debug)]
+pub struct Session {
+    w: usize,
+    h: usize,
+    opts: Options,
+    colors: Vec<Rgb>,
+    /// Smoothness weights to the right, down, down-right and down-left neighbours (eq. 11).
+    nlinks: Vec<[f32; 4]>,
+    /// Negative log-likelihood of each pixel under the border model.
+    border_nll: Vec<f32>,
+    /// Border NLL above which a colour is "not background-like".
+    border_tau: f32,
+    /// Sides (top, bottom, left, right) that the object appears to touch.
+    touched: [bool; 4],
+    fg: Option<Gmm>,
+    bg: Option<Gmm>,
+    hard: Vec<u8>,
+    labels: Vec<bool>,
+    dfg: Vec<f32>,
+    dbg: Vec<f32>,
+    graph: Graph,
+    result: Segmentation,
+}
+
+impl Session {
+    /// Automatic segmentation: border background model, then GrabCut iterations.
+    pub fn automatic(photo: &Photo, opts: &Options) -> Result<Session, SegmentError> {
+        let mut s = Session::prepare(photo, opts)?;
+        // Hard background: the outermost ring on the sides the object does not touch.
+        let (w, h) = (s.w, s.h);
+        for x in 0..w {
+            if !s.touched[0] {
+                s.hard[x] = HARD_BG;
+            }
+            if !s.touched[1] {
+                s.hard[(h - 1) * w + x] = HARD_BG;
+            }
+        }
+        for y in 0..h {
+            if !s.touched[2] {
+                s.hard[y * w] = HARD_BG;
+            }
+            if !s.touched[3] {
+                s.hard[y * w + w - 1] = HARD_BG;
+            }
+        }
+        s.labels = match coarse_labels(photo, opts)? {
+            // Coarse to fine: the half-size result starts the fit here, so the full-size cuts
+            // only move the outline (cheap) instead of settling the whole image (costly).
+            Some(coarse) => (0..w * h).map(|i| !is_bg(s.hard[i]) && coarse[i]).collect(),
+            None => {
+                let tau = s.border_tau;
+                (0..w * h)
+                    .map(|i| !is_bg(s.hard[i]) && s.border_nll[i] > tau)
+                    .collect()
+            }
+        };
+        let iterations = s.opts.iterations;
+        s.run(iterations, true)?;
+        Ok(s)
+    }
+
+    /// Interactive start from a rectangle (GrabCut proper): outside is background for sure,
+    /// inside starts as object.
+    pub fn with_rect(photo: &Photo, rect: BBox, opts: &Options) -> Result<Session, SegmentError> {
+        let mut s = Session::prepare(photo, opts)?;
+        s.set_rect(rect)?;
+        s.labels = (0..s.w * s.h).map(|i| !is_bg(s.hard[i])).collect();
+        let iterations = s.opts.iterations;
+        s.run(iterations, true)?;
+        Ok(s)
+    }
+
+    /// Marks everything outside `rect` (working-image pixels, end exclusive) as background.
+    pub fn set_rect(&mut self, rect: BBox) -> Result<(), SegmentError> {
+        if rect.x0 >= rect.x1
+            || rect.y0 >= rect.y1
+            || rect.x1 as usize > self.w
+            || rect.y1 as usize > self.h
+        {
+            return Err(SegmentError(format!(
+                "rectangle {rect:?} is empty or outside the {}×{} image",
+                self.w, self.h
+            )));
+        }
+        for y in 0..self.h {
+            for x in 0..self.w {
+                let inside = (rect.x0 as usize..rect.x1 as usize).contains(&x)
+                    && (rect.y0 as usize..rect.y1 as usize).contains(&y);
+                let i = y * self.w + x;
+                if !inside {
+                    self.hard[i] = HARD_BG;
+                    self.labels[i] = false;
+                } else if self.hard[i] == HARD_BG {
+                    self.hard[i] = NONE;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Paints a stroke of hard constraints (object or background) along a polyline.
+    pub fn add_stroke(&mut self, stroke: &Stroke) -> Result<(), SegmentError> {
+        let value = match stroke.label {
+            Label::Object => HARD_FG,
+            Label::Background => STROKE_BG,
+        };
+        let (w, h) = (self.w, self.h);
+        for_stroke_pixels(stroke, w, h, |i| {
+            self.hard[i] = value;
+            self.labels[i] = value == HARD_FG;
+        })
+    }
+
+    /// Re-runs the cut after rectangles or strokes changed: fits the colour models to the
+    /// current labelling and the strokes, and cuts, `recut_iterations` times.
+    pub fn recut(&mut self) -> Result<&Segmentation, SegmentError> {
+        let iterations = self.opts.recut_iterations.max(1);
+        // Fresh fits: a stroke can remove a colour from a model entirely, which a refit of the
+        // old components (one of them fitted to that colour) would not do.
+        self.run(iterations, true)?;
+        Ok(&self.result)
+    }
+
+    /// The current result.
+    pub fn segmentation(&self) -> &Segmentation {
+        &self.result
+    }
+
+    fn prepare(photo: &Photo, opts: &Options) -> Result<Session, SegmentError> {
+        let (w, h) = (photo.width() as usize, photo.height() as usize);
+        if w < 8 || h < 8 {
+            return Err(SegmentError(format!("{w}×{h} is too small to segment")));
+        }
+        if opts.iterations == 0 {
+            return Err(SegmentError::new(
+                "at least one GrabCut iteration is needed",
+            ));
+        }
+        let colors = photo.colors();
+        let nlinks = nlinks_of(&colors, w, h);
+        let (border_model, border_tau, touched) = border_model(&colors, w, h)?;
+        let border_nll: Vec<f32> = colors.iter().map(|c| border_model.nll(c)).collect();
+        let empty = Mask::empty(w as u32, h as u32)?;
+        Ok(Session {
+            w,
+            h,
+            opts: opts.clone(),
+            nlinks,
+            border_nll,
+            border_tau,
+            touched,
+            fg: None,
+            bg: None,
+            hard: vec![NONE; w * h],
+            labels: vec![false; w * h],
+            dfg: vec![0.0; w * h],
+            dbg: vec![0.0; w * h],
+            graph: Graph::default(),
+            result: Segmentation {
+                object: empty.clone(),
+                mask: empty,
+                bbox: None,
+                confidence: 0.0,
+                warnings: Vec::new(),
+            },
+            colors,
+        })
+    }
+
+    /// Colour-model fits and cuts; with `fresh` the first fit starts from k-means instead of the
+    /// previous models (later ones always refine the previous models, as GrabCut does).
+    fn run(&mut self, iterations: usize, fresh: bool) -> Result<(), SegmentError> {
+        let n = self.w * self.h;
+        let min_object = (n / 2000).max(4);
+        for it in 0..iterations {
+            let hard = &self.hard;
+            let fit_labels =
+                morph::largest_component(&self.labels, self.w, self.h, &|i| hard[i] == HARD_FG);
+            let fg_count = fit_labels.iter().filter(|&&l| l).count();
+            if fg_count < min_object {
+                self.labels = fit_labels;
+                break;
+            }
+            self.fit_models(&fit_labels, fresh && it == 0)?;
+            let changed = self.cut();
+            // Converged: another colour fit would reproduce the same cut.
+            if changed <= n / 2000 {
+                break;
+            }
+        }
+        self.finish()
+    }
+
+    fn fit_models(&mut self, labels: &[bool], fresh: bool) -> Result<(), SegmentError> {
+        // Colours the user marked as background are no evidence for the object, and vice
+        // versa: a stroke means "this colour belongs there", not only "these pixels".
+        let exclude_fg = stroke_colour_filter(&self.colors, &self.hard, STROKE_BG);
+        let exclude_bg = stroke_colour_filter(&self.colors, &self.hard, HARD_FG);
+        let mut fg_s = Vec::new();
+        let mut bg_s = Vec::new();
+        let n = labels.len();
+        let stride = (n / MAX_SAMPLES).max(1);
+        for i in (0..n).step_by(stride) {
+            let c = &self.colors[i];
+            let is_fg = match self.hard[i] {
+                HARD_FG => true,
+                h if is_bg(h) => false,
+                _ => labels[i],
+            };
+            if is_fg {
+                if self.hard[i] == HARD_FG || !exclude_fg.as_ref().is_some_and(|f| f(c)) {
+                    fg_s.push(*c);
+                }
+            } else if is_bg(self.hard[i]) || !exclude_bg.as_ref().is_some_and(|f| f(c)) {
+                bg_s.push(*c);
+            }
+        }
+        // Strokes are thin; without this the sampling stride could skip all of them.
+        for i in 0..n {
+            if i % stride != 0 {
+                match self.hard[i] {
+                    HARD_FG if fg_s.len() < 2 * MAX_SAMPLES => fg_s.push(self.colors[i]),
+                    h if is_bg(h) && bg_s.len() < 2 * MAX_SAMPLES && i % 4 == 0 => {
+                        bg_s.push(self.colors[i])
+                    }
+                    _ => {}
+                }
+            }
+        }
+
+        let refit = |old: &Option<Gmm>, s: &[Rgb]| match old {
+            Some(g) if !fresh => g.refit(s).or_else(|| Gmm::fit(s, 2)),
+            _ => Gmm::fit(s, 2),
+        };
+        let fg = refit(&self.fg, &fg_s);
+        let bg = refit(&self.bg, &bg_s);
+        match (fg, bg) {
+            (Some(f), Some(b)) => {
+                self.fg = Some(f);
+                self.bg = Some(b);
+                Ok(())
+            }
+            _ => Err(SegmentError::new(
+                "cannot build colour models: no object or no background pixels",
+            )),
+        }
+    }
+
+    /// One min-cut of GrabCut's energy with the current colour models (eq. 7–11).
+    /// Returns how many pixels changed label.
+    fn cut(&mut self) -> usize {
+        let (Some(fg), Some(bg)) = (&self.fg, &self.bg) else {
+            return 0;
+        };
+        let (w, h) = (self.w, self.h);
+        for (i, c) in self.colors.iter().enumerate() {
+            self.dfg[i] = fg.nll(c);
+            self.dbg[i] = bg.nll(c);
+        }
+
+        let (hard, dfg, dbg) = (&self.hard, &self.dfg, &self.dbg);
+        let g = &mut self.graph;
+        cut_grid(g, w, h, &self.nlinks, true, |i| match hard[i] {
+            HARD_FG => HARD,
+            h if is_bg(h) => -HARD,
+            // Only the difference of the data terms matters to the cut.
+            _ => dbg[i] - dfg[i],
+        });
+        let mut changed = 0;
+        for i in 0..w * h {
+            let l = g.is_source(i);
+            changed += usize::from(l != self.labels[i]);
+            self.labels[i] = l;
+        }
+        changed
+    }
+
+    /// Clean-up (largest component, holes), don't-care band, bounding box and confidence.
+    fn finish(&mut self) -> Result<(), SegmentError> {
+        let (w, h) = (self.w, self.h);
+        let n = w * h;
+        let hard = &self.hard;
+        let mut obj = morph::largest_component(&self.labels, w, h, &|i| hard[i] == HARD_FG);
+        // Fill holes unless they are real: a hole whose colours match the border background
+        // (a handle's loop) or that the user marked as background stays open.
+        let min_hole = (n / 4000).max(6);
+        for hole in morph::holes(&obj, w, h) {
+            let marked = hole.iter().any(|&i| self.hard[i] == STROKE_BG);
+            let bg_like = hole
+                .iter()
+                .filter(|&&i| self.border_nll[i] <= self.border_tau)
+                .count();
+            let real = marked || (hole.len() >= min_hole && 2 * bg_like >= hole.len());
+            if !real {
+                for i in hole {
+                    obj[i] = true;
+                }
+            }
+        }
+        let area = obj.iter().filter(|&&o| o).count();
+        let mut warnings = Vec::new();
+        let frac = area as f32 / n as f32;
+        if frac < 0.002 {
+            warnings.push(
+                "no distinct object found: the image looks like its border everywhere".to_owned(),
+            );
+        } else if frac > 0.9 {
+            warnings.push("the object seems to fill the whole frame".to_owned());
+        }
+        let sides = touching_sides(&obj, w, h);
+        if area > 0 && sides >= 2 {
+            warnings.push(format!(
+                "the object touches {sides} image borders; the background model may be wrong"
+            ));
+        }
+        if self.touched.iter().filter(|&&t| t).count() >= 2 {
+            warnings.push(
+                "the image border is not one background: it differs on two or more sides"
+                    .to_owned(),
+            );
+        }
+        // Confidence: how often the cut agrees with the colour models alone. Close to 1 when
+        // object and background colours separate cleanly.
+        let agree = if self.fg.is_some() {
+            (0..n)
+                .filter(|&i| obj[i] == (self.dfg[i] < self.dbg[i]))
+                .count() as f32
+                / n as f32
+        } else {
+            0.0
+        };
+        if self.fg.is_some() && agree < 0.85 && area > 0 {
+            warnings.push(format!(
+                "object and background colours overlap ({:.0}% agreement); check the mask",
+                agree * 100.0
+            ));
+        }
+        let confidence = if warnings.is_empty() {
+            agree
+        } else {
+            agree.min(0.4)
+        };
+        self.labels.clone_from(&obj);
+        self.result = build_segmentation(&obj, w, h, confidence, warnings)?;
+        Ok(())
+    }
+}
+
+/// The 0/1 mask, the don't-care band and the bounding box of a binary object mask.
+pub(super) fn build_segmentation(
+    obj: &[bool],
+    w: usize,
+    h: usize,
+    confidence: f32,
+    warnings: Vec<String>,
+) -> Result<Segmentation, SegmentError> {
+    let r = (w.max(h) / 256).max(1);
+    let band = morph::boundary_band(obj, w, h, r);
+    let object = Mask::new(
+        w as u32,
+        h as u32,
+        obj.iter().map(|&o| if o { 1.0 } else { 0.0 }).collect(),
+    )?;
+    let mask = Mask::new(
+        w as u32,
+        h as u32,
+        obj.iter()
+            .zip(&band)
+            .map(|(&o, &b)| {
+                if b {
+                    Mask::DONT_CARE
+                } else if o {
+                    1.0
+                } else {
+                    0.0
+                }
+            })
+            .collect(),
+    )?;
+    Ok(Segmentation {
+        object,
+        mask,
+        bbox: bbox_of(obj, w),
+        confidence,
+        warnings,
+    })
+}
+
+/// Automatic segmentation of the half-size photo, upsampled to full size; `None` when the
+/// photo is already small or nothing was found at half size.
+fn coarse_labels(photo: &Photo, opts: &Options) -> Result<Option<Vec<bool>>, SegmentError> {
+    let (w, h) = (photo.width() as usize, photo.height() as usize);
+    if w * h < COARSE_MIN_PIXELS {
+        return Ok(None);
+    }
+    let (cw, ch) = (w / 2, h / 2);
+    let (rgba, _) = area_resample(photo.rgba(), w as u32, h as u32, 4, cw as u32, ch as u32);
+    let small = Photo::from_parts(cw as u32, ch as u32, rgba, photo.source_size());
+    let coarse = Session::automatic(&small, opts)?;
+    if coarse.result.bbox.is_none() {
+        return Ok(None);
+    }
+    let up = (0..w * h)
+        .map(|i| {
+            let (x, y) = ((i % w / 2).min(cw - 1), (i / w / 2).min(ch - 1));
+            coarse.labels[y * cw + x]
+        })
+        .collect();
+    Ok(Some(up))
+}
+
+/// Builds GrabCut's grid graph in `g` and cuts it: `data(i)` is the pixel's preference for the
+/// source (object) side, > 0 object, < 0 background (a difference of data terms, or ±[`HARD`]);
+/// edges link each pixel to its eight neighbours with the `nlinks` weights. With `reuse`, a
+/// graph already built by an earlier call for the same grid and weights only gets its
+/// capacities restored (the n-links never change within a session).
+pub(super) fn cut_grid(
+    g: &mut Graph,
+    w: usize,
+    h: usize,
+    nlinks: &[[f32; 4]],
+    reuse: bool,
+    data: impl Fn(usize) -> f32,
+) {
+    if !(reuse && g.nodes() == w * h && g.restore()) {
+        build_grid(g, w, h, nlinks);
+    }
+    for i in 0..w * h {
+        let d = data(i).clamp(-HARD, HARD);
+        if d > 0.0 {
+            g.add_tweights(i, d, 0.0);
+        } else {
+            g.add_tweights(i, 0.0, -d);
+        }
+    }
+    g.maxflow();
+}
+
+fn build_grid(g: &mut Graph, w: usize, h: usize, nlinks: &[[f32; 4]]) {
+    g.reset(w * h, 4 * w * h);
+    for y in 0..h {
+        for x in 0..w {
+            let i = y * w + x;
+            let nl = nlinks[i];
+            if x + 1 < w {
+                g.add_edge(i, i + 1, nl[0], nl[0]);
+            }
+            if y + 1 < h {
+                g.add_edge(i, i + w, nl[1], nl[1]);
+                if x + 1 < w {
+                    g.add_edge(i, i + w + 1, nl[2], nl[2]);
+                }
+                if x > 0 {
+                    g.add_edge(i, i + w - 1, nl[3], nl[3]);
+                }
+            }
+        }
+    }
+    g.save();
+}
+
+/// Bounding box of the `true` pixels (end exclusive), if any.
+pub(super) fn bbox_of(obj: &[bool], w: usize) -> Option<BBox> {
+    let mut b: Option<BBox> = None;
+    for (i, _) in obj.iter().enumerate().filter(|(_, o)| **o) {
+        let (x, y) = ((i % w) as u32, (i / w) as u32);
+        let bb = b.get_or_insert(BBox {
+            x0: x,
+            y0: y,
+            x1: x + 1,
+            y1: y + 1,
+        });
+        bb.x0 = bb.x0.min(x);
+        bb.y0 = bb.y0.min(y);
+        bb.x1 = bb.x1.max(x + 1);
+        bb.y1 = bb.y1.max(y + 1);
+    }
+    b
+}
+
+/// Number of image sides on which the object covers more than a quarter of the side.
+fn touching_sides(obj: &[bool], w: usize, h: usize) -> usize {
+    let top = (0..w).filter(|&x| obj[x]).count();
+    let bottom = (0..w).filter(|&x| obj[(h - 1) * w + x]).count();
+    let left = (0..h).filter(|&y| obj[y * w]).count();
+    let right = (0..h).filter(|&y| obj[y * w + w - 1]).count();
+    [(top, w), (bottom, w), (left, h), (right, h)]
+        .iter()
+        .filter(|&&(c, len)| 4 * c > len)
+        .count()
+}
+
+/// Calls `f` for every pixel within `radius` of the stroke's polyline.
+pub(super) fn for_stroke_pixels(
+    stroke: &Stroke,
+    w: usize,
+    h: usize,
+    mut f: impl FnMut(usize),
+) -> Result<(), SegmentError> {
+    let r = stroke.radius;
+    if !(r.is_finite() && r > 0.0 && r <= 4096.0) {
+        return Err(SegmentError(format!(
+            "stroke radius {r} must be in (0, 4096]"
+        )));
+    }
+    if stroke.points.is_empty() {
+        return Err(SegmentError::new("a stroke needs at least one point"));
+    }
+    if stroke
+        .points
+        .iter()
+        .any(|p| !(p[0].is_finite() && p[1].is_finite()))
+    {
+        return Err(SegmentError::new("stroke points must be finite"));
+    }
+    let segs: Vec<([f32; 2], [f32; 2])> = if stroke.points.len() == 1 {
+        vec![(stroke.points[0], stroke.points[0])]
+    } else {
+        stroke.points.windows(2).map(|p| (p[0], p[1])).collect()
+    };
+    for (a, b) in segs {
+        let x0 = (a[0].min(b[0]) - r).floor().max(0.0) as usize;
+        let y0 = (a[1].min(b[1]) - r).floor().max(0.0) as usize;
+        let x1 = ((a[0].max(b[0]) + r).ceil().max(0.0) as usize).min(w);
+        let y1 = ((a[1].max(b[1]) + r).ceil().max(0.0) as usize).min(h);
+        let d = [b[0] - a[0], b[1] - a[1]];
+        let len2 = d[0] * d[0] + d[1] * d[1];
+        for y in y0..y1 {
+            for x in x0..x1 {
+                let p = [x as f32 + 0.5 - a[0], y as f32 + 0.5 - a[1]];
+                let t = if len2 > 0.0 {
+                    ((p[0] * d[0] + p[1] * d[1]) / len2).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                let q = [p[0] - t * d[0], p[1] - t * d[1]];
+                if q[0] * q[0] + q[1] * q[1] <= r * r {
+                    f(y * w + x);
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A predicate "this colour looks like the pixels marked `which`", or `None` without marks.
+fn stroke_colour_filter(colors: &[Rgb], hard: &[u8], which: u8) -> Option<impl Fn(&Rgb) -> bool> {
+    let samples: Vec<Rgb> = colors
+        .iter()
+        .zip(hard)
+        .filter(|(_, h)| **h == which)
+        .map(|(c, _)| *c)
+        .step_by(1)
+        .take(MAX_SAMPLES)
+        .collect();
+    if samples.len() < 8 {
+        return None;
+    }
+    let g = Gmm::fit(&samples, 2)?;
+    // Neighbouring stroke pixels share JPEG blocks and lighting, so the stroke's spread
+    // understates the region's: widen the acceptance by a margin (Mahalanobis² + 2·margin).
+    let tau = percentile(samples.iter().map(|c| g.nll(c)).collect(), 0.98) + STROKE_MARGIN;
+    Some(move |c: &Rgb| g.nll(c) <= tau)
+}
+
+/// The `p`-quantile of `v` (0 ≤ p ≤ 1).
+fn percentile(mut v: Vec<f32>, p: f32) -> f32 {
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_unstable_by(f32::total_cmp);
+    let k = ((v.len() - 1) as f32 * p).round() as usize;
+    v[k.min(v.len() - 1)]
+}
+
+/// GrabCut's contrast-sensitive n-link weights γ/dist · exp(−β‖zᵢ − zⱼ‖²) with
+/// β = 1 / (2⟨‖zᵢ − zⱼ‖²⟩) (eq. 11 and the text after it).
+pub(super) fn nlinks_of(colors: &[Rgb], w: usize, h: usize) -> Vec<[f32; 4]> {
+    let d2 =
+        |a: &Rgb, b: &Rgb| (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2);
+    let mut sum = 0.0f64;
+    let mut count = 0usize;
+    let mut raw = vec![[f32::NAN; 4]; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            let i = y * w + x;
+            let c = &colors[i];
+            let mut put = |k: usize, j: usize| {
+                let v = d2(c, &colors[j]);
+                raw[i][k] = v;
+                sum += f64::from(v);
+                count += 1;
+            };
+            if x + 1 < w {
+                put(0, i + 1);
+            }
+            if y + 1 < h {
+                put(1, i + w);
+                if x + 1 < w {
+                    put(2, i + w + 1);
+                }
+                if x > 0 {
+                    put(3, i + w - 1);
+                }
+            }
+        }
+    }
+    let mean = (sum / count.max(1) as f64).max(1e-8);
+    let beta = (1.0 / (2.0 * mean)) as f32;
+    let diag = GAMMA / std::f32::consts::SQRT_2;
+    raw.iter()
+        .map(|r| {
+            let e = |k: usize, g: f32| {
+                if r[k].is_nan() {
+                    0.0
+                } else {
+                    g * (-beta * r[k]).exp()
+                }
+            };
+            [e(0, GAMMA), e(1, GAMMA), e(2, diag), e(3, diag)]
+        })
+        .collect()
+}
+
+/// The border background model, the "background-like" threshold and the touched sides.
+fn border_model(colors: &[Rgb], w: usize, h: usize) -> Result<(Gmm, f32, [bool; 4]), SegmentError> {
+    let b = (w.min(h) / 40).max(2);
+    let side = |s: usize| -> Vec<usize> {
+        let mut v = Vec::new();
+        match s {
+            0 => (0..b).for_each(|y| (0..w).for_each(|x| v.push(y * w + x))),
+            1 => (h - b..h).for_each(|y| (0..w).for_each(|x| v.push(y * w + x))),
+            2 => (0..h).for_each(|y| (0..b).for_each(|x| v.push(y * w + x))),
+            _ => (0..h).for_each(|y| (w - b..w).for_each(|x| v.push(y * w + x))),
+        }
+        v
+    };
+    let sides: Vec<Vec<usize>> = (0..4).map(side).collect();
+    let sample = |idx: &mut dyn Iterator<Item = usize>, cap: usize| -> Vec<Rgb> {
+        let all: Vec<usize> = idx.collect();
+        let stride = (all.len() / cap).max(1);
+        all.iter().step_by(stride).map(|&i| colors[i]).collect()
+    };
+    let mut touched = [false; 4];
+    let mut keep: Vec<Rgb> = Vec::new();
+    for s in 0..4 {
+        let others = sample(
+            &mut (0..4)
+                .filter(|&o| o != s)
+                .flat_map(|o| sides[o].iter().copied()),
+            6000,
+        );
+        let model = Gmm::fit(&others, 2)
+            .ok_or_else(|| SegmentError::new("internal: empty border sample"))?;
+        let tau = percentile(others.iter().map(|c| model.nll(c)).collect(), 0.99);
+        let own = sample(&mut sides[s].iter().copied(), 6000);
+        let outliers: Vec<bool> = own.iter().map(|c| model.nll(c) > tau).collect();
+        let frac = outliers.iter().filter(|&&o| o).count() as f32 / own.len().max(1) as f32;
+        touched[s] = frac > TOUCH_FRACTION;
+        keep.extend(
+            own.iter()
+                .zip(&outliers)
+                .filter(|(_, o)| !touched[s] || !**o)
+                .map(|(c, _)| *c),
+        );
+    }
+    let model =
+        Gmm::fit(&keep, 3).ok_or_else(|| SegmentError::new("internal: empty border sample"))?;
+    let tau = percentile(
+        keep.iter().map(|c| model.nll(c)).collect(),
+        BORDER_PERCENTILE,
+    );
+    Ok((model, tau, touched))
+}
