@@ -398,11 +398,27 @@ impl Session {
             loss: best.value,
             stage: 1,
         });
-        let x = best.x.clone();
-        self.phase = self.start_adam(2, x);
+        // The best few distinct individuals of stage 1 (the best first).
+        let mut pop: Vec<&crate::optim::Individual> = search.memetic.population().iter().collect();
+        pop.sort_by(|a, b| a.value.total_cmp(&b.value));
+        let mut starts: Vec<Vec<f64>> = vec![best.x.clone()];
+        for ind in pop {
+            if starts.len() >= PROBES {
+                break;
+            }
+            if !starts.contains(&ind.x) {
+                starts.push(ind.x.clone());
+            }
+        }
+        let specs = search.generator.params();
+        self.phase = self.start_adam(2, best.x.clone());
         if let Phase::Adam(stage) = &mut self.phase {
-            let spent = simplify(&stage.objective, search.generator.params(), &mut stage.x);
+            let side =
+                self.config.resolutions[1].min(self.masks[0].width().max(self.masks[0].height()));
+            let (x, spent) = probe(&stage.objective, &stage.domain, specs, starts);
+            stage.x = x;
             self.evaluations += spent;
+            self.work_done += 2.0 * spent as f64 * work_weight(side);
         }
     }
 
@@ -632,6 +648,46 @@ fn simplify(
         }
     }
     spent
+}
+
+/// Stage-1 individuals tried at stage-2 resolution before stage 2 commits to one.
+const PROBES: usize = 4;
+
+/// Adam iterations of each probe.
+const PROBE_ITERATIONS: usize = 12;
+
+/// The hand-over from stage 1 to stage 2. At 128² and coarse detail a wrong basin (another
+/// camera elevation with a compensating shape) can score a hair better than the right one, so
+/// the best few distinct individuals are each simplified ([`simplify`]) and given a short Adam
+/// run at stage 2's resolution, in parallel; the best goes on. Returns it and the evaluations
+/// spent.
+fn probe(
+    objective: &FitObjective,
+    domain: &Domain,
+    specs: &[crate::generators::ParamSpec],
+    starts: Vec<Vec<f64>>,
+) -> (Vec<f64>, usize) {
+    use rayon::prelude::*;
+    let adam = AdamConfig {
+        iterations: PROBE_ITERATIONS,
+        lr: 0.01,
+        ..AdamConfig::default()
+    };
+    let results: Vec<(Vec<f64>, f64, usize)> = starts
+        .into_par_iter()
+        .map(|mut x| {
+            let spent = simplify(objective, specs, &mut x);
+            let (ind, evals) = crate::optim::adam_search(objective, domain, &x, &adam);
+            (ind.x, ind.value, spent + evals)
+        })
+        .collect();
+    let spent = results.iter().map(|r| r.2).sum();
+    let best = results
+        .into_iter()
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|r| r.0)
+        .unwrap_or_default();
+    (best, spent)
 }
 
 /// Camera pitch candidates (radians; positive looks down on the object).

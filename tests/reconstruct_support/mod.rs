@@ -45,11 +45,21 @@ pub fn random_dish(rng: &mut Rng, handle: bool) -> Vec<f64> {
 /// camera 14°–34° above the object (much lower and a bowl's rim ellipse degenerates, so its
 /// depth cannot be told from one view), the object filling about 60 % of the image height.
 pub fn random_view_at(rng: &mut Rng, mesh: &Mesh, fov_y: f64, spin: f64) -> ViewParams {
+    let yaw = spin + rng.range(-0.7, 0.7);
+    let pitch = rng.range(0.25, 0.6);
+    view_with(rng, mesh, fov_y, yaw, pitch)
+}
+
+/// Like [`random_view_at`] with a given camera elevation.
+pub fn view_at(rng: &mut Rng, mesh: &Mesh, fov_y: f64, spin: f64, pitch: f64) -> ViewParams {
+    let yaw = spin + rng.range(-0.7, 0.7);
+    view_with(rng, mesh, fov_y, yaw, pitch)
+}
+
+fn view_with(rng: &mut Rng, mesh: &Mesh, fov_y: f64, yaw: f64, pitch: f64) -> ViewParams {
     let (lo, hi) = mesh.bounds().unwrap();
     let size = f64::from((hi - lo).max_element());
     let centre = (0.5 * (lo + hi)).as_dvec3();
-    let yaw = spin + rng.range(-0.7, 0.7);
-    let pitch = rng.range(0.25, 0.6);
     let roll = rng.range(-0.05, 0.05);
     let half_h = 3.0 * (0.5 * fov_y).tan();
     let scale = rng.range(0.9, 1.3) * half_h / size;
@@ -128,4 +138,33 @@ pub fn positions(mesh: &Mesh) -> &[Vec3] {
 /// The generator by name.
 pub fn generator(name: &str) -> &'static dyn Generator {
     generators::by_name(name).unwrap()
+}
+
+/// A random building: a preset with its floor count changed by up to one and every continuous
+/// parameter moved by up to 6 % of its range, so it is none of the presets.
+pub fn random_building(rng: &mut Rng) -> Vec<f64> {
+    let g = generators::by_name("building").unwrap();
+    let presets = g.presets();
+    let mut x = presets[rng.below(presets.len())].values.clone();
+    for (i, s) in g.params().iter().enumerate() {
+        if s.kind.is_continuous() {
+            x[i] += rng.range(-0.06, 0.06) * (s.max - s.min);
+        } else if s.name == "floors" {
+            x[i] += rng.below(3) as f64 - 1.0;
+        }
+    }
+    procfit::generators::sanitize_params(g.params(), &x).unwrap()
+}
+
+/// IoU-64 aligned through view `v`.
+pub fn fit_iou64_view(result: &FitResult, reference: &Mesh, truth: &ViewParams, v: usize) -> f64 {
+    let g = result.model.generator;
+    let mesh = g.generate(&result.model.params, Lod::High).unwrap();
+    let aligned = align_to_reference(&mesh.positions, &result.views[v].params, truth);
+    iou64(
+        (&aligned, &mesh.triangles),
+        (&reference.positions, &reference.triangles),
+        128,
+    )
+    .unwrap()
 }
