@@ -76,8 +76,10 @@ pub fn camera_pose() -> CameraPose {
     )
 }
 
-/// One view's fitted values.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// One view's fitted values; also the camera JSON of `procfit render` (missing fields take
+/// their defaults: no rotation, centred, scale 1, [`DEFAULT_FOV_Y`]).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
 pub struct ViewVars {
     /// Object spin about its own vertical axis (radians).
     pub yaw: f64,
@@ -93,6 +95,20 @@ pub struct ViewVars {
     pub log_scale: f64,
     /// Vertical field of view (radians).
     pub fov_y: f64,
+}
+
+impl Default for ViewVars {
+    fn default() -> Self {
+        ViewVars {
+            yaw: 0.0,
+            pitch: 0.0,
+            roll: 0.0,
+            tx: 0.0,
+            ty: 0.0,
+            log_scale: 0.0,
+            fov_y: DEFAULT_FOV_Y,
+        }
+    }
 }
 
 /// The renderer's Euler angles `(yaw, pitch, roll)` with `R_y·R_x·R_z = R` for
