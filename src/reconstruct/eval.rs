@@ -14,6 +14,7 @@ use crate::camera::{View, ViewParams};
 use crate::generators::Mesh;
 use crate::loss;
 use crate::mask::Mask;
+use crate::render::{Renderer, Topology};
 use glam::{DVec3, Vec3};
 
 /// Turntable views of the evaluation.
@@ -42,15 +43,6 @@ pub fn normalized(positions: &[Vec3]) -> Result<Vec<Vec3>, FitError> {
     Ok(positions.iter().map(|&p| (p - c) / size).collect())
 }
 
-/// A mesh with only positions and triangles (what the evaluation needs).
-fn bare(positions: Vec<Vec3>, triangles: &[[u32; 3]]) -> Mesh {
-    Mesh {
-        positions,
-        triangles: triangles.to_vec(),
-        ..Mesh::default()
-    }
-}
-
 /// The IoU-64 between two meshes given in the same frame (each as positions and triangles),
 /// rendered at `side × side`. Returns the mean IoU over the 64 views.
 pub fn iou64(
@@ -58,19 +50,40 @@ pub fn iou64(
     b: (&[Vec3], &[[u32; 3]]),
     side: u32,
 ) -> Result<f64, FitError> {
-    let a = bare(normalized(a.0)?, a.1);
-    let b = bare(normalized(b.0)?, b.1);
+    turntable_iou(a, b, side, EVAL_VIEWS)
+}
+
+/// The mean silhouette IoU over `views` turntable views (azimuth 2πi/views, distance 3, fov
+/// 0.5 rad) after normalising both meshes; [`iou64`] is `views = 64`.
+pub fn turntable_iou(
+    a: (&[Vec3], &[[u32; 3]]),
+    b: (&[Vec3], &[[u32; 3]]),
+    side: u32,
+    views: usize,
+) -> Result<f64, FitError> {
+    let err = |e: crate::render::RenderError| FitError(e.0);
+    let (pa, pb) = (normalized(a.0)?, normalized(b.0)?);
+    // Edge structures and the renderer are built once and reused for every view.
+    let ta = Topology::new(a.1, pa.len()).map_err(err)?;
+    let tb = Topology::new(b.1, pb.len()).map_err(err)?;
+    let mut r = Renderer::new(side, side).map_err(err)?;
+    let mut ca = Vec::new();
     let mut total = 0.0;
-    for i in 0..EVAL_VIEWS {
-        let azimuth = std::f64::consts::TAU * i as f64 / EVAL_VIEWS as f64;
+    for i in 0..views.max(1) {
+        let azimuth = std::f64::consts::TAU * i as f64 / views.max(1) as f64;
         let view = View::turntable(side, side, azimuth, EVAL_DISTANCE, EVAL_FOV_Y, DVec3::ZERO)
             .map_err(|e| FitError(e.to_string()))?;
-        let ca = render_coverage(&a, &view).map_err(FitError)?;
-        let cb = render_coverage(&b, &view).map_err(FitError)?;
-        let mb = Mask::new(side, side, cb).map_err(|e| FitError(e.to_string()))?;
-        total += loss::iou(&ca, &mb).map_err(|e| FitError(e.to_string()))?;
+        ca.clear();
+        ca.extend_from_slice(r.forward(&ta, &pa, &view).map_err(err)?);
+        let cb = r.forward(&tb, &pb, &view).map_err(err)?;
+        let (mut inter, mut union) = (0.0f64, 0.0f64);
+        for (&x, &y) in ca.iter().zip(cb) {
+            inter += f64::from(x.min(y));
+            union += f64::from(x.max(y));
+        }
+        total += if union > 0.0 { inter / union } else { 1.0 };
     }
-    Ok(total / EVAL_VIEWS as f64)
+    Ok(total / views.max(1) as f64)
 }
 
 /// Maps `positions` of a model placed by the object transform `fitted` into the frame of a

@@ -278,9 +278,11 @@ impl FitObjective {
                         .map_err(|e| e.to_string())?;
                     // ViewParams order: yaw pitch roll tx ty tz scale fov pp_x pp_y.
                     let o = layout.view_offset(v);
-                    g[o] = gv[0];
-                    g[o + 1] = gv[1];
-                    g[o + 2] = gv[2];
+                    let vars = layout.view_vars(x, v);
+                    let j = super::views::renderer_angles_jacobian(vars.yaw, vars.pitch, vars.roll);
+                    for m in 0..3 {
+                        g[o + m] = (0..3).map(|k| j[k][m] * gv[k]).sum();
+                    }
                     g[o + 3] = gv[3];
                     g[o + 4] = gv[4];
                     // d/d ln s = s · d/ds.

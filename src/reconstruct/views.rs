@@ -5,8 +5,12 @@
 //! Every view has a fixed camera pose: at [`CAMERA_DISTANCE`] on the +Z axis, looking at the
 //! origin, Y up (the reference implementation's look-at camera, notes "Renderer, loss,
 //! camera"). What is fitted per view is the object transform of the renderer's
-//! [`ViewParams`]: `yaw`, `pitch`, `roll`, the translation `tx`, `ty` across the image and the
-//! logarithm of the object scale `ls` (scale = `exp(ls)`), plus the vertical field of view when
+//! [`ViewParams`], through values that mean what a photo means: `yaw` turns the object about
+//! its own vertical axis, `pitch` is the camera's elevation (positive shows the top), `roll`
+//! the camera's tilt, i.e. `R = R_z(roll)·R_x(pitch)·R_y(yaw)`, converted to the renderer's
+//! Euler angles (`R_y·R_x·R_z`, an order in which pitch with a non-zero yaw leans the object's
+//! axis sideways); then the translation `tx`, `ty` across the image and the logarithm of the
+//! object scale `ls` (scale = `exp(ls)`), plus the vertical field of view when
 //! [`FitConfig::fit_fov`](super::FitConfig::fit_fov) asks for it. The principal point stays at
 //! the image centre (glTF cameras have none).
 //!
@@ -33,7 +37,7 @@ use super::FitError;
 use crate::camera::{CameraPose, View, ViewParams};
 use crate::mask::Mask;
 use crate::optim::Var;
-use glam::{DVec2, DVec3, Vec3};
+use glam::{DMat3, DVec2, DVec3, Vec3};
 
 /// Distance from the camera to the object's origin, in generator units (the paper's evaluation
 /// distance).
@@ -72,14 +76,16 @@ pub fn camera_pose() -> CameraPose {
     )
 }
 
-/// One view's fitted values.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// One view's fitted values; also the camera JSON of `procfit render` (missing fields take
+/// their defaults: no rotation, centred, scale 1, [`DEFAULT_FOV_Y`]).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
 pub struct ViewVars {
-    /// Object rotation about Y (radians).
+    /// Object spin about its own vertical axis (radians).
     pub yaw: f64,
-    /// Object rotation about X (radians); positive shows the top of the object.
+    /// Camera elevation (radians); positive shows the top of the object.
     pub pitch: f64,
-    /// Object rotation about Z (radians).
+    /// Camera tilt about the viewing axis (radians).
     pub roll: f64,
     /// Object translation along X.
     pub tx: f64,
@@ -91,13 +97,71 @@ pub struct ViewVars {
     pub fov_y: f64,
 }
 
+impl Default for ViewVars {
+    fn default() -> Self {
+        ViewVars {
+            yaw: 0.0,
+            pitch: 0.0,
+            roll: 0.0,
+            tx: 0.0,
+            ty: 0.0,
+            log_scale: 0.0,
+            fov_y: DEFAULT_FOV_Y,
+        }
+    }
+}
+
+/// The renderer's Euler angles `(yaw, pitch, roll)` with `R_y·R_x·R_z = R` for
+/// `R = R_z(roll)·R_x(pitch)·R_y(yaw)` (camera tilt, elevation, object spin).
+pub fn renderer_angles(yaw: f64, pitch: f64, roll: f64) -> [f64; 3] {
+    let r =
+        DMat3::from_rotation_z(roll) * DMat3::from_rotation_x(pitch) * DMat3::from_rotation_y(yaw);
+    // For R = R_y(a)·R_x(b)·R_z(c): row 1 is (cos b·sin c, cos b·cos c, −sin b) and column 2
+    // is (sin a·cos b, −sin b, cos a·cos b). glam matrices are column-major: r.col(j)[i] = R_ij.
+    let at = |i: usize, j: usize| r.col(j)[i];
+    let b = (-at(1, 2)).clamp(-1.0, 1.0).asin();
+    let c = at(1, 0).atan2(at(1, 1));
+    let a = at(0, 2).atan2(at(2, 2));
+    [a, b, c]
+}
+
+/// `d renderer_angles / d (yaw, pitch, roll)` by central differences: `j[k][m]` is the
+/// derivative of renderer angle `k` by value `m`. The conversion is smooth away from an
+/// elevation of ±90°, which the pitch range keeps clear of.
+pub fn renderer_angles_jacobian(yaw: f64, pitch: f64, roll: f64) -> [[f64; 3]; 3] {
+    const H: f64 = 1e-6;
+    let mut j = [[0.0; 3]; 3];
+    for m in 0..3 {
+        let mut lo = [yaw, pitch, roll];
+        let mut hi = lo;
+        lo[m] -= H;
+        hi[m] += H;
+        let (a, b) = (
+            renderer_angles(lo[0], lo[1], lo[2]),
+            renderer_angles(hi[0], hi[1], hi[2]),
+        );
+        for k in 0..3 {
+            // Angles can wrap by 2π between the two samples.
+            let mut d = b[k] - a[k];
+            if d > std::f64::consts::PI {
+                d -= std::f64::consts::TAU;
+            } else if d < -std::f64::consts::PI {
+                d += std::f64::consts::TAU;
+            }
+            j[k][m] = d / (2.0 * H);
+        }
+    }
+    j
+}
+
 impl ViewVars {
     /// The renderer's parameters for these values.
     pub fn params(&self) -> ViewParams {
+        let [yaw, pitch, roll] = renderer_angles(self.yaw, self.pitch, self.roll);
         ViewParams {
-            yaw: self.yaw,
-            pitch: self.pitch,
-            roll: self.roll,
+            yaw,
+            pitch,
+            roll,
             translation: DVec3::new(self.tx, self.ty, 0.0),
             scale: self.log_scale.exp(),
             fov_y: self.fov_y,
@@ -317,7 +381,7 @@ pub fn view_domain(
     let half_w = half_h * aspect;
     let mut vars = vec![
         Var::continuous(-PI, PI).with_unit(1.0),
-        Var::continuous(-0.6, 1.5).with_unit(1.0),
+        Var::continuous(-0.6, 1.4).with_unit(1.0),
         Var::continuous(-0.5, 0.5).with_unit(1.0),
         // One unit of translation is half the visible height: lr 0.01 moves ~1 pixel at 256².
         Var::continuous(-1.5 * half_w, 1.5 * half_w).with_unit(0.5 * half_h),

@@ -3,7 +3,7 @@
 
 #![allow(dead_code, reason = "each test binary uses a different subset")]
 
-use glam::{DVec2, DVec3, Vec3};
+use glam::{DVec3, Vec3};
 use procfit::camera::ViewParams;
 use procfit::generators::{self, Generator, Lod, Mesh};
 use procfit::mask::Mask;
@@ -12,8 +12,9 @@ use procfit::reconstruct::{
     FitConfig, FitResult, Session, align_to_reference, iou64, render_coverage, views::ViewVars,
 };
 
-/// A random dish: a preset's body and handle blended towards another's, then jittered, so it
-/// is none of the presets. `handle` forces the handle on or off.
+/// A random dish: a seed's body and handle blended towards another's, then perturbed smoothly
+/// (a random tilt and bend of the profile, small noise elsewhere), so it is none of the presets
+/// yet looks like a real dish. `handle` forces the handle on or off.
 pub fn random_dish(rng: &mut Rng, handle: bool) -> Vec<f64> {
     let g = generators::by_name("dish").unwrap();
     let seeds = g.seeds();
@@ -21,59 +22,74 @@ pub fn random_dish(rng: &mut Rng, handle: bool) -> Vec<f64> {
     let b = &seeds[rng.below(seeds.len())];
     let t = rng.range(0.2, 0.8);
     let mut x: Vec<f64> = a.iter().zip(b).map(|(a, b)| a + t * (b - a)).collect();
-    for (i, s) in g.params().iter().enumerate() {
+    let (tilt, bend, grow) = (
+        rng.range(-0.6, 0.6),
+        rng.range(-0.4, 0.4),
+        rng.range(0.85, 1.15),
+    );
+    for (i, xi) in x.iter_mut().enumerate().take(9) {
+        let s = i as f64 / 8.0;
+        *xi = *xi * grow + tilt * (s - 0.5) + bend * (4.0 * s * (1.0 - s) - 0.5);
+    }
+    for (i, s) in g.params().iter().enumerate().skip(9) {
         if s.kind.is_continuous() {
-            x[i] += rng.normal() * 0.04 * (s.max - s.min);
+            x[i] += rng.normal() * 0.02 * (s.max - s.min);
         }
     }
-    // Profile radii in 0..9 stay monotone enough to look like a dish.
     x[10] = if handle { 1.0 } else { 0.0 };
     procfit::generators::sanitize_params(g.params(), &x).unwrap()
 }
 
-/// A random camera for a single photo: the handle side visible, looking slightly down, the
-/// object filling about 60 % of the image height.
-pub fn random_view(rng: &mut Rng, mesh: &Mesh, side: u32, fov_y: f64) -> ViewParams {
+/// A random camera for a photo as people take them, the object spun by `spin` plus a random
+/// angle: the handle side visible, the
+/// camera 14°–34° above the object (much lower and a bowl's rim ellipse degenerates, so its
+/// depth cannot be told from one view), the object filling about 60 % of the image height.
+pub fn random_view_at(rng: &mut Rng, mesh: &Mesh, fov_y: f64, spin: f64) -> ViewParams {
+    let yaw = spin + rng.range(-0.7, 0.7);
+    let pitch = rng.range(0.25, 0.6);
+    view_with(rng, mesh, fov_y, yaw, pitch)
+}
+
+/// Like [`random_view_at`] with a given camera elevation.
+pub fn view_at(rng: &mut Rng, mesh: &Mesh, fov_y: f64, spin: f64, pitch: f64) -> ViewParams {
+    let yaw = spin + rng.range(-0.7, 0.7);
+    view_with(rng, mesh, fov_y, yaw, pitch)
+}
+
+fn view_with(rng: &mut Rng, mesh: &Mesh, fov_y: f64, yaw: f64, pitch: f64) -> ViewParams {
     let (lo, hi) = mesh.bounds().unwrap();
     let size = f64::from((hi - lo).max_element());
     let centre = (0.5 * (lo + hi)).as_dvec3();
-    let yaw = rng.range(-0.7, 0.7);
-    let pitch = rng.range(0.1, 0.6);
     let roll = rng.range(-0.05, 0.05);
     let half_h = 3.0 * (0.5 * fov_y).tan();
     let scale = rng.range(0.9, 1.3) * half_h / size;
-    let mut p = ViewParams {
+    let mut p = ViewVars {
         yaw,
         pitch,
         roll,
-        translation: DVec3::ZERO,
-        scale,
+        tx: 0.0,
+        ty: 0.0,
+        log_scale: scale.ln(),
         fov_y,
-        principal: DVec2::ZERO,
-    };
+    }
+    .params();
     let c = p.rotation_and_derivatives()[0] * centre * scale;
     p.translation = DVec3::new(
         -c.x + rng.range(-0.1, 0.1) * half_h,
         -c.y + rng.range(-0.1, 0.1) * half_h,
         0.0,
     );
-    let _ = side;
     p
 }
 
 /// The mask of `mesh` seen through `params` at `side²`.
 pub fn render_mask(mesh: &Mesh, params: &ViewParams, side: u32) -> Mask {
-    let vars = ViewVars {
-        yaw: params.yaw,
-        pitch: params.pitch,
-        roll: params.roll,
-        tx: params.translation.x,
-        ty: params.translation.y,
-        log_scale: params.scale.ln(),
-        fov_y: params.fov_y,
+    let view = procfit::camera::View {
+        width: side,
+        height: side,
+        pose: procfit::reconstruct::views::camera_pose(),
+        params: *params,
     };
-    assert_eq!(params.translation.z, 0.0);
-    let view = vars.view(side, side);
     let c = render_coverage(mesh, &view).unwrap();
     // Binarise like a segmented photo.
     Mask::new(
@@ -122,4 +138,33 @@ pub fn positions(mesh: &Mesh) -> &[Vec3] {
 /// The generator by name.
 pub fn generator(name: &str) -> &'static dyn Generator {
     generators::by_name(name).unwrap()
+}
+
+/// A random building: a preset with its floor count changed by up to one and every continuous
+/// parameter moved by up to 6 % of its range, so it is none of the presets.
+pub fn random_building(rng: &mut Rng) -> Vec<f64> {
+    let g = generators::by_name("building").unwrap();
+    let presets = g.presets();
+    let mut x = presets[rng.below(presets.len())].values.clone();
+    for (i, s) in g.params().iter().enumerate() {
+        if s.kind.is_continuous() {
+            x[i] += rng.range(-0.06, 0.06) * (s.max - s.min);
+        } else if s.name == "floors" {
+            x[i] += rng.below(3) as f64 - 1.0;
+        }
+    }
+    procfit::generators::sanitize_params(g.params(), &x).unwrap()
+}
+
+/// IoU-64 aligned through view `v`.
+pub fn fit_iou64_view(result: &FitResult, reference: &Mesh, truth: &ViewParams, v: usize) -> f64 {
+    let g = result.model.generator;
+    let mesh = g.generate(&result.model.params, Lod::High).unwrap();
+    let aligned = align_to_reference(&mesh.positions, &result.views[v].params, truth);
+    iou64(
+        (&aligned, &mesh.triangles),
+        (&reference.positions, &reference.triangles),
+        128,
+    )
+    .unwrap()
 }
