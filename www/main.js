@@ -186,7 +186,7 @@ function renderMaskState() {
     const pct = Math.round(100 * m.confidence);
     if (m.low_confidence) {
       box.dataset.kind = 'warn';
-      box.textContent = `Please check the mask (confidence ${pct} %)${m.warnings.length ? ': ' + m.warnings.join('; ') : ''}. Blue is the object, dark is background, amber is ignored.`;
+      box.textContent = `Please check the mask (confidence ${pct} %)${m.warnings.length ? ': ' + m.warnings.join('; ') : ''}. Blue is the object, dark is background, amber is ignored. If it is wrong, draw a box around the object or paint it with the object brush — or use a photo with a plainer background.`;
     } else {
       box.textContent = `Object found (confidence ${pct} %). Blue is the object, dark is background, amber is ignored. Correct it with the tools below if needed.`;
     }
@@ -571,6 +571,8 @@ $('fit-start').addEventListener('click', async () => {
   } catch (err) {
     say(fitMessage, `The fit failed: ${err.message}. Check the masks above (the object must be inside the photo, not touching every edge), then try again.`);
     outcome = 'failed';
+    // Nothing to show from a fit that never ran.
+    if (!fitter.curves?.[1]?.length) $('fit-progress').hidden = true;
   } finally {
     $('fit-cancel').hidden = true;
     updateFitButton();

@@ -319,6 +319,36 @@ test('a photo by the file picker, a bad file, a drop and a paste', async () => {
   await screenshot(page, '06-photos');
 });
 
+test('a photo with no object gets a message, and so does a fit that cannot work', async () => {
+  // A plain grey picture: nothing to cut out.
+  await page.evaluate(async () => {
+    const c = new OffscreenCanvas(320, 240);
+    const ctx = c.getContext('2d');
+    ctx.fillStyle = '#808080';
+    ctx.fillRect(0, 0, 320, 240);
+    const blob = await c.convertToBlob({ type: 'image/png' });
+    const dt = new DataTransfer();
+    dt.items.add(new File([blob], 'plain wall.png', { type: 'image/png' }));
+    document.body.dispatchEvent(new DragEvent('drop', { dataTransfer: dt, bubbles: true, cancelable: true }));
+  });
+  await page.waitForFunction(() => /No object found|check the mask/i.test(document.getElementById('mask-state').textContent), null, { timeout: 60000 });
+  const text = await page.textContent('#mask-state');
+  assert.doesNotMatch(text, /^Object found/);
+  await screenshot(page, '05b-no-object');
+  // Fitting the plain photo alone fails with a message; the page stays usable.
+  const count = await page.evaluate(() => window.procfit.state.photos.length);
+  for (let i = 0; i < count - 1; i += 1) await page.click('#thumbs li:first-child .remove');
+  await page.waitForFunction(() => window.procfit.state.photos.length === 1);
+  await page.selectOption('#fit-quality', '0.25');
+  await page.evaluate(() => delete document.body.dataset.fitted);
+  await page.click('#fit-start');
+  await page.waitForFunction(() => document.body.dataset.fitted, null, { timeout: 120000 });
+  assert.equal(await page.evaluate(() => document.body.dataset.fitted), 'failed');
+  assert.match(await messageOf('fit-message'), /The fit failed: .+/);
+  await screenshot(page, '05c-fit-failed');
+  await page.selectOption('#fit-quality', '1');
+});
+
 test('the camera (fake device) takes several shots', async () => {
   const n0 = await page.$$eval('#thumbs li', (l) => l.length);
   await page.click('#camera-open');
