@@ -25,6 +25,8 @@ const SAMPLES = [
     table: 0xb39b7a,
     wall: 0xe6e1d8,
     view: { dir: [0.0, 0.35, 1.0], yfov_deg: 32, fill: 0.75 },
+    // A second photo of the same mug from its side, for multi-view fits.
+    more: [{ suffix: 'side', dir: [1.0, 0.3, 0.25], yfov_deg: 32, fill: 0.75 }],
   },
   {
     name: 'bowl',
@@ -58,9 +60,10 @@ try {
   const outDir = join(ROOT, 'www', 'samples');
   mkdirSync(outDir, { recursive: true });
   const index = [];
-  for (const s of SAMPLES) {
-    const shot = await page.evaluate(
-      async ({ s, WIDTH, HEIGHT }) => {
+  /** Renders sample `s` seen along `view`; resolves with the JPEG data URL and the truth. */
+  const render = (s, view) =>
+    page.evaluate(
+      async ({ s, view, WIDTH, HEIGHT }) => {
         const { editor, viewer } = window.procfit;
         const THREE = await import('three');
         const spec = editor.specs.get(s.generator);
@@ -90,17 +93,21 @@ try {
         const box = new THREE.Box3().setFromObject(viewer.model);
         const center = box.getCenter(new THREE.Vector3());
         const radius = box.getSize(new THREE.Vector3()).length() / 2;
-        const half = THREE.MathUtils.degToRad(s.view.yfov_deg / 2);
-        const dist = radius / Math.tan(half * s.view.fill);
-        const eye = center.clone().addScaledVector(new THREE.Vector3(...s.view.dir).normalize(), dist);
-        const cam = new THREE.PerspectiveCamera(s.view.yfov_deg, WIDTH / HEIGHT, dist / 100, dist * 100);
+        const half = THREE.MathUtils.degToRad(view.yfov_deg / 2);
+        const dist = radius / Math.tan(half * view.fill);
+        const eye = center.clone().addScaledVector(new THREE.Vector3(...view.dir).normalize(), dist);
+        const cam = new THREE.PerspectiveCamera(view.yfov_deg, WIDTH / HEIGHT, dist / 100, dist * 100);
         cam.position.copy(eye);
         cam.lookAt(center);
         // The table under the object; the wall behind it, far enough to stay out of focus.
         table.position.y = box.min.y;
         table.scale.setScalar(dist);
         wall.scale.setScalar(dist);
-        wall.position.set(0, box.min.y + 1.5 * dist, -dist);
+        // The wall stands behind the object as this camera sees it, facing the camera, so
+        // every view has a backdrop and no wall edge.
+        const flat = new THREE.Vector3(view.dir[0], 0, view.dir[2]).normalize();
+        wall.position.set(center.x - flat.x * dist, box.min.y + 1.5 * dist, center.z - flat.z * dist);
+        wall.lookAt(center.x + flat.x * dist, box.min.y + 1.5 * dist, center.z + flat.z * dist);
         const r = viewer.renderer;
         const size = r.getSize(new THREE.Vector2());
         const ratio = r.getPixelRatio();
@@ -114,10 +121,21 @@ try {
         r.setSize(size.x, size.y, false);
         return { url, params: preset.values, eye: eye.toArray(), target: center.toArray() };
       },
-      { s, WIDTH, HEIGHT },
+      { s, view, WIDTH, HEIGHT },
     );
+  const camera = (shot, view) => ({ eye: shot.eye, target: shot.target, yfov_deg: view.yfov_deg, width: WIDTH, height: HEIGHT });
+  for (const s of SAMPLES) {
+    const shot = await render(s, s.view);
     const file = `${s.name}.jpg`;
     writeFileSync(join(outDir, file), Buffer.from(shot.url.split(',')[1], 'base64'));
+    const more = [];
+    for (const view of s.more ?? []) {
+      const extra = await render(s, view);
+      const name = `${s.name}-${view.suffix}.jpg`;
+      writeFileSync(join(outDir, name), Buffer.from(extra.url.split(',')[1], 'base64'));
+      more.push({ file: name, camera: camera(extra, view) });
+      console.log(`wrote www/samples/${name}`);
+    }
     index.push({
       name: s.name,
       label: s.label,
@@ -126,7 +144,9 @@ try {
       // The truth, for tests and benchmarks of the fit: the model and the camera of the photo
       // (glTF convention: the camera looks down −Z; y up; yfov is vertical).
       truth: { preset: s.preset, params: shot.params, lod: 3 },
-      camera: { eye: shot.eye, target: shot.target, yfov_deg: s.view.yfov_deg, width: WIDTH, height: HEIGHT },
+      camera: camera(shot, s.view),
+      // Further photos of the same object (not on the sample button; for multi-view tests).
+      ...(more.length ? { more_views: more } : {}),
     });
     console.log(`wrote www/samples/${file}`);
   }
