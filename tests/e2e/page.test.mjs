@@ -8,7 +8,7 @@ import assert from 'node:assert/strict';
 import { readFileSync } from 'node:fs';
 import { join } from 'node:path';
 import validator from 'gltf-validator';
-import { startServer, launchBrowser, openPage, screenshot, writeArtifact, ROOT } from './harness.mjs';
+import { startServer, launchBrowser, openPage, screenshot, writeArtifact, ROOT, ARTIFACTS } from './harness.mjs';
 
 let server;
 let browser;
@@ -419,6 +419,13 @@ test('on a phone in portrait the page fits the width', async () => {
   const overflow = await phone.evaluate(() => document.documentElement.scrollWidth - window.innerWidth);
   assert.ok(overflow <= 0, `the page is ${overflow}px wider than the phone`);
   await screenshot(phone, '08-phone');
+  // The camera fills the phone's screen, its buttons within reach.
+  await phone.click('#camera-open');
+  await phone.waitForFunction(() => document.querySelector('dialog#camera video').videoWidth > 0);
+  const shutter = await phone.locator('#camera-shoot').boundingBox();
+  assert.ok(shutter && shutter.y + shutter.height <= 844, 'the shutter is off the phone screen');
+  await phone.screenshot({ path: `${ARTIFACTS}/08b-phone-camera.png` });
+  await phone.click('#camera-done');
   await phone.close();
 });
 
