@@ -569,7 +569,10 @@ $('fit-start').addEventListener('click', async () => {
     );
     outcome = out.cancelled ? 'cancelled' : 'done';
   } catch (err) {
-    say(fitMessage, `The fit failed: ${err.message}. Check the masks above (the object must be inside the photo, not touching every edge), then try again.`);
+    const hint = /same size/.test(err.message)
+      ? 'Use photos of the same shape and size (all from the same camera, all landscape or all portrait).'
+      : 'Check the masks above (the object must be inside the photo, not touching every edge), then try again.';
+    say(fitMessage, `The fit failed: ${err.message}. ${hint}`);
     outcome = 'failed';
     // Nothing to show from a fit that never ran.
     if (!fitter.curves?.[1]?.length) $('fit-progress').hidden = true;
