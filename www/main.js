@@ -104,6 +104,7 @@ function persist() {
       await store.save({
         photos: await Promise.all(state.photos.map(store.photoRecord)),
         selected: state.selected,
+        step: state.step ?? null,
         model: { ...state.editor.state, base: state.editor.base, presetName: state.presetName },
       });
       document.body.dataset.saved = String(started);
@@ -137,9 +138,26 @@ async function restore() {
     chooseGenerator(m.generator, { params: m.params, lod: m.lod, preset: m.presetName ?? 'custom', cameras: m.cameras ?? [] });
     if (Array.isArray(m.base) && m.base.length === m.params.length) state.editor.base = m.base;
   }
+  // Back to the step the person was working in.
+  const step = rec.step && document.getElementById(rec.step);
+  if (step?.classList.contains('step')) {
+    state.step = rec.step;
+    step.scrollIntoView({ block: 'start' });
+  }
   $('restored-text').textContent = `Restored your last session${photos.length ? ` (${photos.length} photo${photos.length === 1 ? '' : 's'})` : ''}.`;
   $('restored').hidden = false;
   return true;
+}
+
+// The step a person works in is the last one they touched (kept with the session).
+for (const type of ['pointerdown', 'focusin']) {
+  document.addEventListener(type, (e) => {
+    const step = e.target instanceof Element ? e.target.closest('section.step') : null;
+    if (step && step.id !== state.step) {
+      state.step = step.id;
+      persist();
+    }
+  });
 }
 
 $('start-over').addEventListener('click', async () => {

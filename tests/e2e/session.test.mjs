@@ -60,6 +60,10 @@ test('a reload restores photos, masks, the model and its starting point', async 
   assert.equal(await page.inputValue('#lod'), '0');
   assert.deepEqual(afterReload.codes, before.codes);
   assert.equal(await page.isVisible('#restored'), true);
+  // The step last worked in (the model's sliders) is the one scrolled to.
+  assert.equal(await page.evaluate(() => window.procfit.state.step), 'step-model');
+  const top = await page.evaluate(() => document.getElementById('step-model').getBoundingClientRect().top);
+  assert.ok(Math.abs(top) < 5, `the model step is ${top}px from the top of the window`);
   assert.match(await page.textContent('#restored-text'), /Restored your last session \(1 photo\)/);
   await screenshot(page, '09-restored');
 });
