@@ -21,6 +21,8 @@ fn config(views: usize, quality: f64) -> FitConfig {
         generator: "dish".into(),
         fov_y: vec![Some(0.5); views],
         quality,
+        // Stage 1 at 2000 evaluations keeps the suite fast; the default is 5000.
+        budget: Some(2000),
         ..FitConfig::default()
     }
 }
