@@ -235,3 +235,53 @@ fn measured_mug_from_obj_reconstructs() {
     eprintln!("measured mug: IoU-64 {iou:.4}");
     assert!(iou >= 0.93, "measured mug: IoU-64 {iou:.4} < 0.93");
 }
+
+#[test]
+fn auto_picks_the_generator_that_fits() {
+    let check = |name: &str, mesh: &procfit::generators::Mesh, seed: u64| {
+        let mut rng = Rng::new(seed);
+        let truth = random_view_at(&mut rng, mesh, 0.5, 0.0);
+        let mask = render_mask(mesh, &truth, 128);
+        let cfg = FitConfig {
+            generator: "auto".into(),
+            budget: Some(600),
+            quality: 0.3,
+            ..config(1, 0.3)
+        };
+        let r = fit(cfg, vec![mask]);
+        assert_eq!(r.model.generator.name(), name);
+    };
+    check("dish", &measured_mug(), 41);
+    let b = mesh_of("building", &random_building(&mut Rng::new(42)), Lod::High);
+    check("building", &b, 43);
+}
+
+#[test]
+fn session_reports_progress_and_can_stop_early() {
+    let mut rng = Rng::new(51);
+    let mesh = measured_mug();
+    let truth = random_view_at(&mut rng, &mesh, 0.5, 0.0);
+    let mask = render_mask(&mesh, &truth, 200);
+    let mut s = Session::new(config(1, 0.3), vec![mask]).unwrap();
+    assert!(s.result().is_err(), "nothing evaluated yet");
+    let mut stages = Vec::new();
+    let mut last_work = 0.0;
+    for _ in 0..40 {
+        let p = s.step();
+        assert!(p.work_done >= last_work && p.work_done <= p.work_total);
+        last_work = p.work_done;
+        stages.push(p.stage);
+        assert!(p.best_loss.is_finite());
+        assert_eq!(p.params.len(), 53);
+        assert_eq!(p.cameras.len(), 1);
+        // The preview is the best silhouette at ≤ 128 a side, in the mask's aspect.
+        let preview = p.preview.expect("a preview");
+        assert_eq!((preview.width(), preview.height()), (128, 128));
+        assert!(preview.area() > 100.0);
+    }
+    // Cancelling is not stepping: the best so far is a usable model.
+    let r = s.result().unwrap();
+    assert_eq!(r.views.len(), 1);
+    assert!(!s.is_done());
+    assert!(stages.windows(2).all(|w| w[0] <= w[1]));
+}
