@@ -22,7 +22,7 @@ pub struct ReconstructArgs {
     /// Seed of the fit (same seed, same result).
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Stage-1 evaluations (default 2000 × quality).
+    /// Stage-1 evaluations (default 5000 × quality).
     #[arg(long)]
     budget: Option<usize>,
     /// Quality/speed knob: multiplies every stage's budget.

@@ -21,6 +21,8 @@ fn config(views: usize, quality: f64) -> FitConfig {
         generator: "dish".into(),
         fov_y: vec![Some(0.5); views],
         quality,
+        // Stage 1 at 2000 evaluations keeps the suite fast; the default is 5000.
+        budget: Some(2000),
         ..FitConfig::default()
     }
 }
@@ -222,89 +224,9 @@ fn single_view_building_3() {
     check_building(3, 0.90);
 }
 
-/// A mug lathed from measured dimensions (a common 300 ml mug: 80 mm across, 95 mm tall,
-/// 4 mm wall, 6 mm base, a round handle of 10 mm tube on a 28 mm bend), 48 sectors and a
-/// 12-sided handle tube — not the generator's construction or tessellation — as OBJ text.
-fn measured_mug_obj() -> String {
-    use std::f64::consts::{PI, TAU};
-    use std::fmt::Write;
-    let mm = 0.001;
-    // Closed profile (radius, height) from the bottom centre over the outside, the rim and
-    // the inside back to the axis.
-    let profile = [
-        (0.0, 0.0),
-        (36.0, 0.0),
-        (39.0, 1.5),
-        (40.0, 5.0),
-        (40.0, 60.0),
-        (40.0, 95.0),
-        (38.0, 95.0),
-        (36.0, 93.0),
-        (36.0, 10.0),
-        (33.0, 6.0),
-        (0.0, 6.0),
-    ];
-    let sectors = 48;
-    let mut obj = String::from("# measured mug\n");
-    let mut n = 0usize;
-    for &(r, y) in &profile {
-        for s in 0..sectors {
-            let a = TAU * s as f64 / sectors as f64;
-            writeln!(
-                obj,
-                "v {} {} {}",
-                r * a.cos() * mm,
-                y * mm,
-                -r * a.sin() * mm
-            )
-            .unwrap();
-        }
-    }
-    for k in 0..profile.len() - 1 {
-        for s in 0..sectors {
-            let (a, b) = (k * sectors + s, k * sectors + (s + 1) % sectors);
-            let (c, d) = (a + sectors, b + sectors);
-            writeln!(obj, "f {} {} {}", a + 1, b + 1, d + 1).unwrap();
-            writeln!(obj, "f {} {} {}", a + 1, d + 1, c + 1).unwrap();
-        }
-    }
-    n += profile.len() * sectors;
-    // Handle: a tube swept over half a circle on the +X side, its ends inside the wall.
-    let (steps, ring, tube, bend, cy) = (24, 12, 5.0, 28.0, 50.0);
-    for i in 0..=steps {
-        let t = -PI / 2.0 + PI * i as f64 / steps as f64;
-        let (cx, cyy) = (38.0 + bend * t.cos(), cy + bend * t.sin());
-        let (nx, ny) = (t.cos(), t.sin());
-        for j in 0..ring {
-            let u = TAU * j as f64 / ring as f64;
-            let (x, y, z) = (
-                cx + tube * u.cos() * nx,
-                cyy + tube * u.cos() * ny,
-                tube * u.sin(),
-            );
-            writeln!(obj, "v {} {} {}", x * mm, y * mm, z * mm).unwrap();
-        }
-    }
-    for i in 0..steps {
-        for j in 0..ring {
-            let a = n + i * ring + j;
-            let b = n + i * ring + (j + 1) % ring;
-            let (c, d) = (a + ring, b + ring);
-            writeln!(obj, "f {} {} {}", a + 1, d + 1, b + 1).unwrap();
-            writeln!(obj, "f {} {} {}", a + 1, c + 1, d + 1).unwrap();
-        }
-    }
-    obj
-}
-
 #[test]
 fn measured_mug_from_obj_reconstructs() {
-    let reference = procfit::glb::import_obj(measured_mug_obj().as_bytes()).unwrap();
-    let mesh = procfit::generators::Mesh {
-        positions: reference.positions.clone(),
-        triangles: reference.triangles.clone(),
-        ..Default::default()
-    };
+    let mesh = measured_mug();
     let mut rng = Rng::new(31);
     let truth = random_view_at(&mut rng, &mesh, 0.5, 0.0);
     let mask = render_mask(&mesh, &truth, 256);
@@ -312,4 +234,54 @@ fn measured_mug_from_obj_reconstructs() {
     let iou = fit_iou64(&r, &mesh, &truth);
     eprintln!("measured mug: IoU-64 {iou:.4}");
     assert!(iou >= 0.93, "measured mug: IoU-64 {iou:.4} < 0.93");
+}
+
+#[test]
+fn auto_picks_the_generator_that_fits() {
+    let check = |name: &str, mesh: &procfit::generators::Mesh, seed: u64| {
+        let mut rng = Rng::new(seed);
+        let truth = random_view_at(&mut rng, mesh, 0.5, 0.0);
+        let mask = render_mask(mesh, &truth, 128);
+        let cfg = FitConfig {
+            generator: "auto".into(),
+            budget: Some(600),
+            quality: 0.3,
+            ..config(1, 0.3)
+        };
+        let r = fit(cfg, vec![mask]);
+        assert_eq!(r.model.generator.name(), name);
+    };
+    check("dish", &measured_mug(), 41);
+    let b = mesh_of("building", &random_building(&mut Rng::new(42)), Lod::High);
+    check("building", &b, 43);
+}
+
+#[test]
+fn session_reports_progress_and_can_stop_early() {
+    let mut rng = Rng::new(51);
+    let mesh = measured_mug();
+    let truth = random_view_at(&mut rng, &mesh, 0.5, 0.0);
+    let mask = render_mask(&mesh, &truth, 200);
+    let mut s = Session::new(config(1, 0.3), vec![mask]).unwrap();
+    assert!(s.result().is_err(), "nothing evaluated yet");
+    let mut stages = Vec::new();
+    let mut last_work = 0.0;
+    for _ in 0..40 {
+        let p = s.step();
+        assert!(p.work_done >= last_work && p.work_done <= p.work_total);
+        last_work = p.work_done;
+        stages.push(p.stage);
+        assert!(p.best_loss.is_finite());
+        assert_eq!(p.params.len(), 53);
+        assert_eq!(p.cameras.len(), 1);
+        // The preview is the best silhouette at ≤ 128 a side, in the mask's aspect.
+        let preview = p.preview.expect("a preview");
+        assert_eq!((preview.width(), preview.height()), (128, 128));
+        assert!(preview.area() > 100.0);
+    }
+    // Cancelling is not stepping: the best so far is a usable model.
+    let r = s.result().unwrap();
+    assert_eq!(r.views.len(), 1);
+    assert!(!s.is_done());
+    assert!(stages.windows(2).all(|w| w[0] <= w[1]));
 }

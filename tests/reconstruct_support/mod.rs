@@ -168,3 +168,88 @@ pub fn fit_iou64_view(result: &FitResult, reference: &Mesh, truth: &ViewParams, 
     )
     .unwrap()
 }
+
+/// A mug lathed from measured dimensions (a common 300 ml mug: 80 mm across, 95 mm tall,
+/// 4 mm wall, 6 mm base, a round handle of 10 mm tube on a 28 mm bend), 48 sectors and a
+/// 12-sided handle tube — not the generator's construction or tessellation — as OBJ text.
+pub fn measured_mug_obj() -> String {
+    use std::f64::consts::{PI, TAU};
+    use std::fmt::Write;
+    let mm = 0.001;
+    // Closed profile (radius, height) from the bottom centre over the outside, the rim and
+    // the inside back to the axis.
+    let profile = [
+        (0.0, 0.0),
+        (36.0, 0.0),
+        (39.0, 1.5),
+        (40.0, 5.0),
+        (40.0, 60.0),
+        (40.0, 95.0),
+        (38.0, 95.0),
+        (36.0, 93.0),
+        (36.0, 10.0),
+        (33.0, 6.0),
+        (0.0, 6.0),
+    ];
+    let sectors = 48;
+    let mut obj = String::from("# measured mug\n");
+    let mut n = 0usize;
+    for &(r, y) in &profile {
+        for s in 0..sectors {
+            let a = TAU * s as f64 / sectors as f64;
+            writeln!(
+                obj,
+                "v {} {} {}",
+                r * a.cos() * mm,
+                y * mm,
+                -r * a.sin() * mm
+            )
+            .unwrap();
+        }
+    }
+    for k in 0..profile.len() - 1 {
+        for s in 0..sectors {
+            let (a, b) = (k * sectors + s, k * sectors + (s + 1) % sectors);
+            let (c, d) = (a + sectors, b + sectors);
+            writeln!(obj, "f {} {} {}", a + 1, b + 1, d + 1).unwrap();
+            writeln!(obj, "f {} {} {}", a + 1, d + 1, c + 1).unwrap();
+        }
+    }
+    n += profile.len() * sectors;
+    // Handle: a tube swept over half a circle on the +X side, its ends inside the wall.
+    let (steps, ring, tube, bend, cy) = (24, 12, 5.0, 28.0, 50.0);
+    for i in 0..=steps {
+        let t = -PI / 2.0 + PI * i as f64 / steps as f64;
+        let (cx, cyy) = (38.0 + bend * t.cos(), cy + bend * t.sin());
+        let (nx, ny) = (t.cos(), t.sin());
+        for j in 0..ring {
+            let u = TAU * j as f64 / ring as f64;
+            let (x, y, z) = (
+                cx + tube * u.cos() * nx,
+                cyy + tube * u.cos() * ny,
+                tube * u.sin(),
+            );
+            writeln!(obj, "v {} {} {}", x * mm, y * mm, z * mm).unwrap();
+        }
+    }
+    for i in 0..steps {
+        for j in 0..ring {
+            let a = n + i * ring + j;
+            let b = n + i * ring + (j + 1) % ring;
+            let (c, d) = (a + ring, b + ring);
+            writeln!(obj, "f {} {} {}", a + 1, d + 1, b + 1).unwrap();
+            writeln!(obj, "f {} {} {}", a + 1, c + 1, d + 1).unwrap();
+        }
+    }
+    obj
+}
+
+/// The measured mug as a mesh (through the OBJ importer).
+pub fn measured_mug() -> Mesh {
+    let reference = procfit::glb::import_obj(measured_mug_obj().as_bytes()).unwrap();
+    Mesh {
+        positions: reference.positions,
+        triangles: reference.triangles,
+        ..Mesh::default()
+    }
+}
