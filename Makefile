@@ -10,12 +10,13 @@ WASM_DIR := target/wasm
 WASM_FLAGS := --release --lib --target $(WASM_TARGET) --target-dir $(WASM_DIR) \
 	-Z build-std=panic_abort,std
 
-.PHONY: help setup setup-test wasm serve test lint test-rust test-e2e bench clean-pkg
+.PHONY: help setup setup-test wasm wasm-st dist serve test lint test-rust test-e2e bench bench-page clean-pkg
 
 help:
 	@echo "make serve   build the wasm and serve the page on http://127.0.0.1:8080/ (PORT=... to change)"
 	@echo "make test    lint, Rust tests, wasm build and browser tests (what CI runs)"
-	@echo "make bench   print the benchmark tables"
+	@echo "make bench   print the benchmark tables (make bench-page: the page's, in Chromium)"
+	@echo "make dist    build dist/, a folder any static host serves as is"
 
 setup:
 	@scripts/setup.sh
@@ -26,6 +27,23 @@ setup-test:
 wasm: setup
 	cargo +nightly build $(WASM_FLAGS) --features threads
 	wasm-bindgen --target web --out-dir pkg $(WASM_DIR)/$(WASM_TARGET)/release/procfit.wasm
+
+# The single-threaded fallback for pages served without COOP/COEP (no SharedArrayBuffer): the
+# config's atomics rustflags are overridden, so std needs no rebuild.
+wasm-st: setup
+	RUSTFLAGS="" cargo +nightly build --release --lib --target $(WASM_TARGET) --target-dir target/wasm-st
+	wasm-bindgen --target web --out-dir pkg-st target/wasm-st/$(WASM_TARGET)/release/procfit.wasm
+
+# A static site: the page, both wasm builds and the few three.js modules the page imports.
+# Served with COOP/COEP it runs threaded; without, single-threaded (and says so).
+THREE_FILES := build/three.module.js build/three.core.js LICENSE \
+	examples/jsm/loaders/GLTFLoader.js examples/jsm/controls/OrbitControls.js \
+	examples/jsm/utils/BufferGeometryUtils.js examples/jsm/utils/SkeletonUtils.js
+dist: wasm wasm-st
+	rm -rf dist && mkdir -p dist
+	cp -r index.html www pkg pkg-st dist/
+	cd node_modules/three && for f in $(THREE_FILES); do install -D -m 644 $$f ../../dist/node_modules/three/$$f; done
+	@echo "dist/ is ready: serve it from any static host (COOP/COEP headers enable threads)"
 
 serve: wasm
 	python3 scripts/serve.py
@@ -39,7 +57,7 @@ lint: setup
 test-rust:
 	cargo test --workspace --locked
 
-test-e2e: wasm
+test-e2e: dist
 	node --test --test-concurrency=1 tests/e2e/
 
 test: setup-test lint test-rust test-e2e
@@ -47,3 +65,6 @@ test: setup-test lint test-rust test-e2e
 bench: wasm
 	cargo bench --workspace --locked
 	node scripts/bench-wasm.mjs
+
+bench-page: wasm
+	node tests/e2e/bench.mjs

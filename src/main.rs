@@ -9,6 +9,8 @@ use procfit::model::Model;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+mod recon_cli;
+
 #[derive(Parser)]
 #[command(
     name = "procfit",
@@ -79,6 +81,13 @@ enum Command {
         #[arg(long)]
         out: Option<std::path::PathBuf>,
     },
+    /// Fit a generator to one or more photos (or mask images) of an object and write the model
+    /// as a GLB with one camera per image.
+    Reconstruct(recon_cli::ReconstructArgs),
+    /// Render a generator's silhouette through a camera to a mask PNG.
+    Render(recon_cli::RenderArgs),
+    /// IoU over 64 turntable views between a model GLB and a reference mesh (OBJ or GLB).
+    Eval(recon_cli::EvalArgs),
 }
 
 fn main() -> ExitCode {
@@ -118,6 +127,9 @@ fn main() -> ExitCode {
             gaussian,
             out.as_deref(),
         ),
+        Command::Reconstruct(args) => recon_cli::reconstruct(&args),
+        Command::Render(args) => recon_cli::render(&args),
+        Command::Eval(args) => recon_cli::eval(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,16 +1,41 @@
 // The page's entry point (main thread): draws and listens, never runs wasm. All work goes to
-// the worker through WorkerClient.
+// the worker through WorkerClient. This file wires the steps together: photos in (drop, pick,
+// paste, camera, samples) → generator → the live model editor → download / open.
 import { WorkerClient } from './client.js';
 import { REQUESTS } from './protocol.js';
+import { el, say, download, stem } from './ui.js';
+import { loadPhoto, isModelFile, MAX_PHOTOS, reserveIds } from './photos.js';
+import * as store from './store.js';
+import { CameraCapture } from './camera.js';
+import { Viewer } from './viewer.js';
+import { Editor, LODS } from './editor.js';
+import { MaskEditor, autoMask } from './masking.js';
+import { FitRunner } from './fitting.js';
 
+const $ = (id) => document.getElementById(id);
 const client = new WorkerClient();
-const status = document.getElementById('status');
+const status = $('status');
+const state = { photos: [], selected: null, specs: [], editor: null, viewer: null, presetName: null };
+
+// A handle for the browser tests and the curious: the page's worker client and protocol.
+window.procfit = { client, REQUESTS, state };
 
 client.addEventListener('status', (e) => {
   const d = e.detail;
   status.dataset.state = d.state;
   if (d.state === 'ready') {
     status.textContent = `ready — ${d.threads} thread${d.threads === 1 ? '' : 's'}`;
+    const notice = $('notice');
+    notice.hidden = d.threaded;
+    notice.textContent = d.threaded
+      ? ''
+      : 'procfit is running on one thread: this page is served without cross-origin isolation (COOP/COEP headers), so it cannot use all your cores. Everything works; fits take longer.';
+    // After a crash the worker is new but the session lives here: show the model again and
+    // give each mask a worker session for corrections.
+    if (client.restarts > 0) {
+      state.editor?.schedule();
+      reviveMasks();
+    }
   } else if (d.state === 'starting') {
     status.textContent = 'starting…';
   } else if (d.state === 'crashed') {
@@ -20,5 +45,582 @@ client.addEventListener('status', (e) => {
   }
 });
 
-// A handle for the browser tests and the curious: the page's worker client and protocol.
-window.procfit = { client, REQUESTS };
+// ---- Photos -------------------------------------------------------------------------------
+
+const photosMessage = $('photos-message');
+
+/** Takes files from any source: photos join the list, a GLB/JSON opens as a model. */
+async function addFiles(files, source = 'file') {
+  say(photosMessage, '');
+  const list = [...files];
+  if (!list.length) {
+    say(photosMessage, source === 'paste' ? 'The clipboard holds no image. Copy a photo, then paste again.' : 'No file came through. Try again, or use “Choose photos…”.');
+    return;
+  }
+  const problems = [];
+  for (const file of list) {
+    if (isModelFile(file)) {
+      await openModelFile(file);
+      continue;
+    }
+    if (state.photos.length >= MAX_PHOTOS) {
+      problems.push(`procfit takes up to ${MAX_PHOTOS} photos; remove one to add “${file.name}”.`);
+      continue;
+    }
+    try {
+      addPhoto(await loadPhoto(file, file.name || `pasted ${state.photos.length + 1}.png`));
+    } catch (err) {
+      problems.push(err.message);
+    }
+  }
+  if (problems.length) say(photosMessage, problems.join(' '));
+}
+
+function addPhoto(photo) {
+  state.photos.push(photo);
+  selectPhoto(photo.id);
+  findMask(photo);
+  persist();
+}
+
+/** Worker sessions for masks the page already has (after a restore or a worker restart). */
+function reviveMasks() {
+  for (const p of state.photos) {
+    if (p.mask) autoMask(client, p, { keep: true }).catch(() => {});
+  }
+}
+
+// ---- Persistence ----------------------------------------------------------------------------
+
+let persistTimer = null;
+/** Saves the session to IndexedDB a moment after the last change (many changes → one write). */
+function persist() {
+  clearTimeout(persistTimer);
+  persistTimer = setTimeout(async () => {
+    if (!state.editor?.state || state.clearing) return;
+    // For the browser tests: when the last save that finished had started.
+    const started = Date.now();
+    try {
+      await store.save({
+        photos: await Promise.all(state.photos.map(store.photoRecord)),
+        selected: state.selected,
+        step: state.step ?? null,
+        model: { ...state.editor.state, base: state.editor.base, presetName: state.presetName },
+      });
+      document.body.dataset.saved = String(started);
+    } catch (err) {
+      say($('notice'), `Your work could not be saved on this device (${err.message}); it stays until you close the page.`, 'info');
+    }
+  }, 400);
+}
+
+/** Restores the saved session, if any; says so with a way to start over. */
+async function restore() {
+  const rec = await store.load();
+  if (!rec) return false;
+  const photos = [];
+  for (const r of rec.photos ?? []) {
+    try {
+      photos.push(await store.photoFromRecord(r));
+    } catch {
+      // A photo that cannot be decoded any more is dropped; the rest of the session stays.
+    }
+  }
+  photos.forEach((p) => reserveIds(p.id));
+  state.photos = photos;
+  state.selected = photos.some((p) => p.id === rec.selected) ? rec.selected : photos[0]?.id ?? null;
+  renderPhotos();
+  reviveMasks();
+  // Photos saved before their mask was ready get one now.
+  photos.filter((p) => !p.mask).forEach(findMask);
+  const m = rec.model;
+  if (m && state.specs.some((g) => g.name === m.generator)) {
+    chooseGenerator(m.generator, { params: m.params, lod: m.lod, preset: m.presetName ?? 'custom', cameras: m.cameras ?? [] });
+    if (Array.isArray(m.base) && m.base.length === m.params.length) state.editor.base = m.base;
+  }
+  // Back to the step the person was working in.
+  const step = rec.step && document.getElementById(rec.step);
+  if (step?.classList.contains('step')) {
+    state.step = rec.step;
+    step.scrollIntoView({ block: 'start' });
+  }
+  $('restored-text').textContent = `Restored your last session${photos.length ? ` (${photos.length} photo${photos.length === 1 ? '' : 's'})` : ''}.`;
+  $('restored').hidden = false;
+  return true;
+}
+
+// The step a person works in is the last one they touched (kept with the session).
+for (const type of ['pointerdown', 'focusin']) {
+  document.addEventListener(type, (e) => {
+    const step = e.target instanceof Element ? e.target.closest('section.step') : null;
+    if (step && step.id !== state.step) {
+      state.step = step.id;
+      persist();
+    }
+  });
+}
+
+$('start-over').addEventListener('click', async () => {
+  // No save may follow the clear (IndexedDB runs a store's transactions in order, so one
+  // already in flight lands before it).
+  state.clearing = true;
+  clearTimeout(persistTimer);
+  await store.clear().catch(() => {});
+  location.reload();
+});
+
+/** Runs the automatic mask for `photo`, keeping the page told. */
+async function findMask(photo) {
+  photo.maskState = 'working';
+  renderMaskState();
+  try {
+    await autoMask(client, photo);
+    photo.maskState = 'ready';
+  } catch (err) {
+    photo.maskState = 'failed';
+    photo.maskError = err.message;
+  }
+  if (!state.photos.includes(photo)) {
+    client.call(REQUESTS.MASK_DROP, { key: String(photo.id) }).catch(() => {});
+    return;
+  }
+  if (state.selected === photo.id) maskEditor.setPhoto(photo);
+  renderMaskState();
+  persist();
+}
+
+function renderMaskState() {
+  const box = $('mask-state');
+  const photo = state.photos.find((p) => p.id === state.selected);
+  $('mask-tools').hidden = !photo?.mask;
+  box.dataset.kind = '';
+  if (!photo) box.textContent = '';
+  else if (photo.maskState === 'working') box.textContent = 'Finding the object…';
+  else if (photo.maskState === 'failed') {
+    box.textContent = `No object found: ${photo.maskError}. Try a photo with the object in the middle against a plain background, or draw a box around it.`;
+    box.dataset.kind = 'warn';
+  } else if (photo.mask) {
+    const m = photo.mask;
+    const pct = Math.round(100 * m.confidence);
+    if (m.low_confidence) {
+      box.dataset.kind = 'warn';
+      box.textContent = `Please check the mask (confidence ${pct} %)${m.warnings.length ? ': ' + m.warnings.join('; ') : ''}. Blue is the object, dark is background, amber is ignored. If it is wrong, draw a box around the object or paint it with the object brush — or use a photo with a plainer background.`;
+    } else {
+      box.textContent = `Object found (confidence ${pct} %). Blue is the object, dark is background, amber is ignored. Correct it with the tools below if needed.`;
+    }
+  }
+  updateFitButton();
+}
+
+function selectPhoto(id) {
+  state.selected = id;
+  renderPhotos();
+  persist();
+}
+
+function removePhoto(id) {
+  const i = state.photos.findIndex((p) => p.id === id);
+  if (i < 0) return;
+  state.photos[i].bitmap.close();
+  state.photos.splice(i, 1);
+  client.call(REQUESTS.MASK_DROP, { key: String(id) }).catch(() => {});
+  persist();
+  if (state.selected === id) state.selected = state.photos[Math.max(0, i - 1)]?.id ?? null;
+  renderPhotos();
+}
+
+function renderPhotos() {
+  const thumbs = $('thumbs');
+  thumbs.replaceChildren();
+  for (const [k, p] of state.photos.entries()) {
+    const c = el('canvas', { width: 96, height: Math.round((96 * p.height) / p.width) });
+    c.getContext('2d').drawImage(p.bitmap, 0, 0, c.width, c.height);
+    const pick = el('button', { type: 'button', class: 'thumb', 'aria-pressed': p.id === state.selected, 'aria-label': `Show photo ${k + 1}: ${p.name}` }, [c]);
+    pick.addEventListener('click', () => selectPhoto(p.id));
+    const remove = el('button', { type: 'button', class: 'remove', 'aria-label': `Remove photo ${k + 1}: ${p.name}` }, ['×']);
+    remove.addEventListener('click', () => removePhoto(p.id));
+    thumbs.append(el('li', {}, [pick, remove]));
+  }
+  const photo = state.photos.find((p) => p.id === state.selected);
+  $('photo-view').hidden = !photo;
+  $('mask-empty').hidden = !!photo;
+  maskEditor.setPhoto(photo ?? null);
+  renderMaskState();
+  if (!photo) return;
+  const canvas = $('photo-canvas');
+  canvas.width = photo.width;
+  canvas.height = photo.height;
+  canvas.getContext('2d').drawImage(photo.bitmap, 0, 0);
+  // Portrait photos stay within the screen's height; the mask overlay follows the photo.
+  document.querySelector('#photo-view .stack').style.maxWidth = `calc(75vh * ${photo.width / photo.height})`;
+  $('photo-caption').textContent = `${photo.name} — ${photo.width}×${photo.height} px${state.photos.length > 1 ? ` · photo ${state.photos.indexOf(photo) + 1} of ${state.photos.length}` : ''}`;
+}
+
+$('file').addEventListener('change', async (e) => {
+  await addFiles(e.target.files);
+  e.target.value = '';
+});
+
+// Drag and drop anywhere on the page; the overlay says what a drop will do.
+let dragDepth = 0;
+const overlay = $('drop-overlay');
+const carriesFiles = (e) => [...(e.dataTransfer?.types || [])].includes('Files');
+window.addEventListener('dragenter', (e) => {
+  if (!carriesFiles(e)) return;
+  e.preventDefault();
+  dragDepth += 1;
+  overlay.hidden = false;
+});
+window.addEventListener('dragover', (e) => {
+  if (!carriesFiles(e)) return;
+  e.preventDefault();
+  e.dataTransfer.dropEffect = 'copy';
+});
+window.addEventListener('dragleave', () => {
+  dragDepth = Math.max(0, dragDepth - 1);
+  if (!dragDepth) overlay.hidden = true;
+});
+window.addEventListener('drop', (e) => {
+  e.preventDefault();
+  dragDepth = 0;
+  overlay.hidden = true;
+  addFiles(e.dataTransfer?.files || []);
+});
+window.addEventListener('paste', (e) => {
+  const files = [...(e.clipboardData?.files || [])];
+  // A paste into a text field is the field's business unless it carries an image.
+  if (!files.length && e.target instanceof HTMLInputElement) return;
+  e.preventDefault();
+  addFiles(files, 'paste');
+});
+
+const camera = new CameraCapture({
+  onShot: async (blob, name) => {
+    try {
+      addPhoto(await loadPhoto(blob, name));
+    } catch (err) {
+      say(photosMessage, err.message);
+    }
+  },
+  onError: (message) => say(photosMessage, message),
+});
+const maskEditor = new MaskEditor({
+  overlay: $('mask-canvas'),
+  client,
+  onChange: () => {
+    renderMaskState();
+    persist();
+  },
+  onError: (message) => say(photosMessage, message),
+});
+document.querySelectorAll('input[name="tool"]').forEach((r) =>
+  r.addEventListener('change', () => r.checked && maskEditor.setTool(r.value)),
+);
+$('brush').addEventListener('input', (e) => (maskEditor.brush = Number(e.target.value)));
+$('mask-show').addEventListener('change', (e) => {
+  maskEditor.show = e.target.checked;
+  maskEditor.draw();
+});
+$('mask-auto').addEventListener('click', () => {
+  const photo = state.photos.find((p) => p.id === state.selected);
+  if (photo) findMask(photo);
+});
+window.procfit.maskEditor = maskEditor;
+
+$('camera-open').addEventListener('click', () => {
+  say(photosMessage, '');
+  camera.open();
+});
+
+/** The bundled samples (www/samples/index.json): a photo and the generator it shows. */
+async function loadSamples() {
+  const box = $('samples');
+  let list;
+  try {
+    const res = await fetch('www/samples/index.json');
+    if (!res.ok) throw new Error(res.statusText);
+    list = (await res.json()).samples;
+  } catch {
+    box.hidden = true;
+    return;
+  }
+  for (const s of list) {
+    const b = el('button', { type: 'button', class: 'sample', 'data-sample': s.name }, [
+      el('img', { src: `www/samples/${s.thumb || s.file}`, alt: '', width: 48, height: 48 }),
+      s.label,
+    ]);
+    b.addEventListener('click', () => openSample(s));
+    box.append(b);
+  }
+}
+
+async function openSample(s) {
+  say(photosMessage, '');
+  try {
+    const res = await fetch(`www/samples/${s.file}`);
+    if (!res.ok) throw new Error(`the sample is missing (${res.status})`);
+    addPhoto(await loadPhoto(await res.blob(), s.file));
+    if (state.specs.some((g) => g.name === s.generator)) chooseGenerator(s.generator);
+  } catch (err) {
+    say(photosMessage, `Could not open the sample: ${err.message}`);
+  }
+}
+
+// ---- Generator, model, download ---------------------------------------------------------------
+
+const modelMessage = $('model-message');
+const outMessage = $('out-message');
+
+/** Every generator the issue names; those this build lacks are shown, disabled. */
+const KNOWN = [
+  ['dish', 'Cup, mug or bowl'],
+  ['building', 'Building'],
+  ['tree', 'Tree'],
+];
+
+function buildGeneratorChoices() {
+  const box = $('generators');
+  for (const [name, label] of KNOWN) {
+    const spec = state.specs.find((g) => g.name === name);
+    const input = el('input', { type: 'radio', name: 'generator', value: name, id: `gen-${name}`, disabled: !spec });
+    input.addEventListener('change', () => chooseGenerator(name));
+    box.append(el('label', { class: 'choice', for: `gen-${name}` }, [input, ' ', spec ? label : `${label} `, spec ? '' : el('span', { class: 'muted' }, ['(not in this build yet)'])]));
+  }
+  const auto = el('input', { type: 'radio', name: 'generator', value: 'auto', id: 'gen-auto' });
+  box.append(el('label', { class: 'choice', for: 'gen-auto' }, [auto, ' Automatic ', el('span', { class: 'muted' }, ['(the fit picks)'])]));
+  for (const spec of state.specs.filter((g) => !KNOWN.some(([n]) => n === g.name))) {
+    const input = el('input', { type: 'radio', name: 'generator', value: spec.name, id: `gen-${spec.name}` });
+    input.addEventListener('change', () => chooseGenerator(spec.name));
+    box.append(el('label', { class: 'choice', for: `gen-${spec.name}` }, [input, ' ', spec.label]));
+  }
+}
+
+function fillPresets(spec, selected) {
+  const select = $('preset');
+  select.replaceChildren(
+    el('option', { value: '' }, ['Defaults']),
+    ...spec.presets.map((p) => el('option', { value: p.name }, [p.label])),
+  );
+  if (selected === 'custom') select.append(el('option', { value: 'custom' }, ['Opened file']));
+  if (selected === 'fitted') select.append(el('option', { value: 'fitted' }, ['Fitted to the photos']));
+  select.value = selected ?? '';
+}
+
+/** Switches to `name` with its first preset (or defaults). */
+function chooseGenerator(name, { params = null, lod = null, preset = undefined, cameras = [] } = {}) {
+  const spec = state.specs.find((g) => g.name === name);
+  if (!spec) return;
+  $(`gen-${name}`).checked = true;
+  const first = preset === undefined ? spec.presets[0] : null;
+  fillPresets(spec, preset ?? first?.name ?? '');
+  state.presetName = preset ?? first?.name ?? null;
+  state.editor.open(name, params ?? first?.values ?? null, lod ?? state.editor.lod, cameras);
+  $('lod').value = String(state.editor.lod);
+}
+
+$('preset').addEventListener('change', (e) => {
+  const spec = state.editor.spec;
+  const preset = spec.presets.find((p) => p.name === e.target.value);
+  state.presetName = preset?.name ?? null;
+  // A preset is a new starting point: reset returns to it; undo still goes back.
+  state.editor.setAll(preset ? preset.values : spec.params.map((p) => p.default));
+  state.editor.base = state.editor.params.slice();
+});
+
+function updateButtons() {
+  const ed = state.editor;
+  $('undo').disabled = !ed.undoStack.length;
+  $('redo').disabled = !ed.redoStack.length;
+}
+
+async function openModelFile(file) {
+  say(outMessage, '');
+  try {
+    const bytes = await file.arrayBuffer();
+    const m = await client.call(REQUESTS.OPEN_MODEL, { bytes }, { transfer: [bytes] });
+    chooseGenerator(m.generator, { params: m.params, lod: m.lod, preset: 'custom' });
+    say(outMessage, `Opened “${file.name}”. Edit it above.`, 'info');
+    $('step-model').scrollIntoView({ behavior: 'smooth', block: 'start' });
+  } catch (err) {
+    say(outMessage, `Could not open “${file.name}”: ${err.message}. procfit opens the GLB and JSON files it saved itself.`);
+  }
+}
+
+function fileStem() {
+  const st = state.editor.state;
+  return stem(`${st.generator}${state.presetName && !['custom', 'fitted'].includes(state.presetName) ? '-' + state.presetName : ''}-${LODS[st.lod].toLowerCase()}`);
+}
+
+$('download-glb').addEventListener('click', async () => {
+  await state.editor.settled();
+  const glb = state.editor.glb;
+  if (!glb) return;
+  download(glb.bytes, `${fileStem()}.glb`, 'model/gltf-binary');
+});
+
+$('download-json').addEventListener('click', async () => {
+  try {
+    const { text } = await client.call(REQUESTS.PARAMS_JSON, state.editor.state);
+    download(text, `${fileStem()}.json`, 'application/json');
+  } catch (err) {
+    say(outMessage, `Could not save the parameters: ${err.message}`);
+  }
+});
+
+$('open-model').addEventListener('change', async (e) => {
+  const file = e.target.files[0];
+  e.target.value = '';
+  if (file) await openModelFile(file);
+});
+
+function setUpModelStep() {
+  const viewer = new Viewer($('viewer'));
+  const editor = new Editor({ client, viewer, specs: state.specs, root: $('sliders') });
+  state.viewer = viewer;
+  state.editor = editor;
+  window.procfit.viewer = viewer;
+  window.procfit.editor = editor;
+
+  const lod = $('lod');
+  LODS.forEach((name, i) => lod.append(el('option', { value: i }, [name])));
+  lod.value = String(editor.lod);
+  lod.addEventListener('change', () => editor.setLod(Number(lod.value)));
+
+  $('wireframe').addEventListener('change', (e) => viewer.setWireframe(e.target.checked));
+  $('part-colors').addEventListener('change', (e) => {
+    viewer.setPartColors(e.target.checked);
+    renderLegend();
+  });
+  $('reframe').addEventListener('click', () => viewer.frame());
+  $('undo').addEventListener('click', () => editor.undo());
+  $('redo').addEventListener('click', () => editor.redo());
+  $('reset').addEventListener('click', () => editor.reset());
+
+  editor.addEventListener('change', () => {
+    updateButtons();
+    persist();
+  });
+  editor.addEventListener('generated', (e) => {
+    const d = e.detail;
+    say(modelMessage, '');
+    $('download-glb').disabled = false;
+    $('download-json').disabled = false;
+    const latency = d.latency === null ? '' : ` · updated in ${Math.round(d.latency)} ms`;
+    $('viewer-info').textContent = `${d.parts.length} part${d.parts.length === 1 ? '' : 's'} · ${d.triangles.toLocaleString('en')} triangles · ${(d.bytes / 1024).toFixed(0)} KB${latency}`;
+    renderLegend();
+    updateButtons();
+    // Every shown model is worth keeping (a drag fires no change event until it ends).
+    persist();
+  });
+  editor.addEventListener('error', (e) => {
+    say(modelMessage, `The model could not be built: ${e.detail.message}`);
+  });
+
+  function renderLegend() {
+    const legend = $('legend');
+    legend.replaceChildren();
+    if (!viewer.partColors) return;
+    viewer.parts.forEach((name, i) =>
+      legend.append(el('span', { class: 'swatch' }, [el('i', { style: `background:${viewer.partColor(i)}` }), name])),
+    );
+  }
+
+  // Undo/redo from the keyboard, except where the key means something to a text field.
+  window.addEventListener('keydown', (e) => {
+    if (!(e.ctrlKey || e.metaKey) || e.altKey) return;
+    const t = e.target;
+    if (t instanceof HTMLInputElement && !['range', 'checkbox', 'radio', 'button'].includes(t.type)) return;
+    if (t instanceof HTMLTextAreaElement) return;
+    const key = e.key.toLowerCase();
+    if (key === 'z' && !e.shiftKey) {
+      e.preventDefault();
+      editor.undo();
+    } else if ((key === 'z' && e.shiftKey) || key === 'y') {
+      e.preventDefault();
+      editor.redo();
+    }
+  });
+}
+
+// ---- Fit ------------------------------------------------------------------------------------
+
+const fitMessage = $('fit-message');
+const fitter = new FitRunner({
+  client,
+  els: { stage: $('fit-stage'), eta: $('fit-eta'), bar: $('fit-bar'), preview: $('fit-preview'), curve: $('fit-curve'), box: $('fit-progress') },
+});
+window.procfit.fitter = fitter;
+
+function fitGenerator() {
+  return document.querySelector('input[name="generator"]:checked')?.value ?? 'auto';
+}
+
+function updateFitButton() {
+  const ready = state.photos.length > 0 && state.photos.every((p) => p.mask);
+  const button = $('fit-start');
+  button.disabled = !ready || !!fitter.running || !state.editor;
+  button.title = ready ? '' : 'Add a photo and wait for its mask first';
+}
+
+$('fit-start').addEventListener('click', async () => {
+  say(fitMessage, '');
+  const generator = fitGenerator();
+  const spec = state.specs.find((g) => g.name === generator);
+  if (spec && !spec.differentiable) {
+    say(fitMessage, `The ${spec.label.toLowerCase()} generator cannot be fitted in this build; choose another or Automatic.`);
+    return;
+  }
+  $('fit-cancel').hidden = false;
+  $('fit-start').disabled = true;
+  $('fit-cancel').focus();
+  let outcome = 'failed';
+  try {
+    const out = await fitter.run({ generator, photos: state.photos.slice(), quality: Number($('fit-quality').value) });
+    const r = out.result;
+    chooseGenerator(r.generator, { params: r.params, lod: state.editor.lod, preset: 'fitted', cameras: r.cameras });
+    say(
+      fitMessage,
+      out.cancelled
+        ? `Stopped after ${out.seconds.toFixed(1)} s; the best model so far is below.`
+        : `Fitted in ${out.seconds.toFixed(1)} s (${r.evaluations.toLocaleString('en')} evaluations). Edit the model below; Reset returns to the fitted values.`,
+      'info',
+    );
+    outcome = out.cancelled ? 'cancelled' : 'done';
+  } catch (err) {
+    const hint = /same size/.test(err.message)
+      ? 'Use photos of the same shape and size (all from the same camera, all landscape or all portrait).'
+      : 'Check the masks above (the object must be inside the photo, not touching every edge), then try again.';
+    say(fitMessage, `The fit failed: ${err.message}. ${hint}`);
+    outcome = 'failed';
+    // Nothing to show from a fit that never ran.
+    if (!fitter.curves?.[1]?.length) $('fit-progress').hidden = true;
+  } finally {
+    $('fit-cancel').hidden = true;
+    updateFitButton();
+    // For the browser tests: the fit's outcome, set once the page is back to rest.
+    document.body.dataset.fitted = outcome;
+  }
+});
+$('fit-cancel').addEventListener('click', () => fitter.cancel());
+
+async function boot() {
+  loadSamples();
+  try {
+    await client.ready;
+    state.specs = await client.call(REQUESTS.GENERATOR_SPECS);
+  } catch (err) {
+    say(modelMessage, `The model editor could not start: ${err.message}. Reload the page to try again.`);
+    return;
+  }
+  if (!state.specs.length) {
+    say(modelMessage, 'This build has no generators.');
+    return;
+  }
+  setUpModelStep();
+  buildGeneratorChoices();
+  if (!(await restore())) chooseGenerator(state.specs[0].name);
+  updateFitButton();
+  document.body.dataset.ready = 'true';
+}
+
+boot();

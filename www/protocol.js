@@ -8,12 +8,39 @@
 //                              { type: 'sys/poisoned', error }    a panic trapped the instance;
 //                                                                 the page restarts the worker
 // `error` is always { message, panic: bool }. Request types are namespaced `room/verb`; the
-// list below is the whole protocol.
+// list below is the whole protocol. Binary payloads travel as transferred ArrayBuffers (the
+// sender gives up its copy), never as arrays of numbers.
 export const REQUESTS = Object.freeze({
   PING: 'sys/ping', //             → { version, threads, threaded }
   THREAD_PROBE: 'sys/threadProbe', // { jobs } → { threads } distinct pool threads that ran jobs
   DEBUG_PANIC: 'sys/debugPanic', // → never answers ok: panics inside wasm, for the error test
   GENERATOR_SPECS: 'gen/specs', // → [{ name, label, version, differentiable, params, presets }]
+  // { generator, params: number[], lod: 0..3, cameras?: number[] } → { glb: ArrayBuffer, ms }:
+  // the model's mesh as the very GLB the page downloads (the viewer loads these bytes), with one
+  // camera node per photo (`cameras`: 18 numbers each — yfov, aspect, camera-to-world matrix
+  // column-major — as a fit's result gives them); `ms` is the worker's time.
+  GENERATE_GLB: 'gen/glb',
+  // { a: { generator, params }, b: { generator, params }, lod, side } → { iou }: the paper's
+  // IoU-64 between two models (for the benchmark).
+  IOU64: 'eval/iou64',
+  // { generator, params, lod } → { text }: the params JSON of the model.
+  PARAMS_JSON: 'model/json',
+  // { bytes: ArrayBuffer } (a procfit GLB or params JSON) → { generator, params, lod, seed }.
+  OPEN_MODEL: 'model/open',
+  // Masks, one session per photo `key` (a string the page chooses). Each answers
+  // { width, height, bbox, confidence, low_confidence, warnings, codes: ArrayBuffer } with the
+  // mask in working pixels: object 255, background 0, don't care 128.
+  MASK_AUTO: 'mask/auto', //   { key, width, height, rgba: ArrayBuffer } → mask (automatic)
+  MASK_RECT: 'mask/rect', //   { key, rect: [x0, y0, x1, y1] } → mask (start over from a box)
+  MASK_STROKE: 'mask/stroke', // { key, object: bool, points: [x, y, …], radius } → mask
+  MASK_DROP: 'mask/drop', //   { key } → {} (the photo was removed)
+  // { fitId, generator ('auto' or a name), seed, quality, masks: [{ width, height, codes }] }
+  // → { cancelled, result: { generator, params, lod, seed, loss, evaluations, cameras } }
+  // (`cameras` as GENERATE_GLB takes them). On the way:
+  // event 'progress' { stage, generator, iteration, evaluations, work_done, work_total,
+  // best_loss, params, done, preview: { width, height, coverage: ArrayBuffer } | null }.
+  FIT_RUN: 'fit/run',
+  FIT_CANCEL: 'fit/cancel', // { fitId } → { found }: the running fit stops after its slice
 });
 
-export const PROTOCOL_VERSION = 1;
+export const PROTOCOL_VERSION = 3;

@@ -18,7 +18,135 @@ const handlers = {
   [REQUESTS.THREAD_PROBE]: ({ jobs = 64 } = {}) => ({ threads: wasm.threadProbe(jobs) }),
   [REQUESTS.DEBUG_PANIC]: () => wasm.debugPanic(),
   [REQUESTS.GENERATOR_SPECS]: () => wasm.generatorSpecs(),
+  [REQUESTS.GENERATE_GLB]: ({ generator, params, lod, cameras = [] }) => {
+    const t0 = performance.now();
+    const bytes = wasm.generateGlb(generator, Float64Array.from(params), lod, Float32Array.from(cameras));
+    const ms = performance.now() - t0;
+    // wasm-bindgen returns a fresh copy, so its buffer can be handed over without another copy.
+    return new Transfer({ glb: bytes.buffer, ms }, [bytes.buffer]);
+  },
+  [REQUESTS.IOU64]: ({ a, b, lod = 1, side = 128 }) => ({
+    iou: wasm.iou64Models(a.generator, Float64Array.from(a.params), b.generator, Float64Array.from(b.params), lod, side),
+  }),
+  [REQUESTS.PARAMS_JSON]: ({ generator, params, lod }) => ({
+    text: wasm.paramsJson(generator, Float64Array.from(params), lod),
+  }),
+  [REQUESTS.OPEN_MODEL]: ({ bytes }) => wasm.openModel(new Uint8Array(bytes)),
+  [REQUESTS.MASK_AUTO]: ({ key, width, height, rgba }) => {
+    masks.get(key)?.free();
+    masks.delete(key);
+    const session = new wasm.MaskSession(width, height, new Uint8Array(rgba));
+    masks.set(key, session);
+    return maskOut(session);
+  },
+  [REQUESTS.MASK_RECT]: ({ key, rect }) => {
+    const session = maskSession(key);
+    session.setRect(...rect.map((v) => Math.max(0, Math.round(v))));
+    return maskOut(session);
+  },
+  [REQUESTS.MASK_STROKE]: ({ key, object, points, radius }) => {
+    const session = maskSession(key);
+    session.addStroke(!!object, Float32Array.from(points), radius);
+    return maskOut(session);
+  },
+  [REQUESTS.MASK_DROP]: ({ key }) => {
+    masks.get(key)?.free();
+    masks.delete(key);
+    return {};
+  },
+  [REQUESTS.FIT_RUN]: (payload, emit) => runFit(payload, emit),
+  [REQUESTS.FIT_CANCEL]: ({ fitId }) => {
+    const found = fits.has(fitId);
+    if (found) fits.get(fitId).cancelled = true;
+    return { found };
+  },
 };
+
+/** Mask sessions by the page's photo key; fits in progress by id. */
+const masks = new Map();
+const fits = new Map();
+
+function maskSession(key) {
+  const s = masks.get(key);
+  if (!s) throw new Error('this photo has no mask yet; add it again');
+  return s;
+}
+
+function maskOut(session) {
+  const codes = session.codes();
+  return new Transfer({ ...session.info(), codes: codes.buffer }, [codes.buffer]);
+}
+
+/** Yields to the worker's message loop (a cancel or a slider's request gets in), unclamped. */
+const tick = (() => {
+  const ch = new MessageChannel();
+  const waiting = [];
+  ch.port1.onmessage = () => waiting.shift()?.();
+  return () => new Promise((resolve) => {
+    waiting.push(resolve);
+    ch.port2.postMessage(0);
+  });
+})();
+
+/** Progress frames at most this often (plus stage changes and the end). */
+const PROGRESS_MS = 100;
+
+async function runFit({ fitId, generator, seed = 1, quality = 1, masks: views }, emit) {
+  if (!views?.length) throw new Error('no masks to fit: add a photo first');
+  const total = views.reduce((n, m) => n + m.width * m.height, 0);
+  const codes = new Uint8Array(total);
+  let at = 0;
+  for (const m of views) {
+    codes.set(new Uint8Array(m.codes), at);
+    at += m.width * m.height;
+  }
+  const session = new wasm.FitSession(
+    generator,
+    seed,
+    quality,
+    Uint32Array.from(views.map((m) => m.width)),
+    Uint32Array.from(views.map((m) => m.height)),
+    codes,
+  );
+  const job = { cancelled: false };
+  fits.set(fitId, job);
+  try {
+    let last = 0;
+    let stage = 0;
+    for (;;) {
+      const p = session.step();
+      const now = performance.now();
+      if (p.done || p.stage !== stage || now - last >= PROGRESS_MS) {
+        last = now;
+        stage = p.stage;
+        const w = session.previewWidth();
+        let preview = null;
+        const transfer = [];
+        if (w) {
+          const coverage = session.previewCoverage();
+          preview = { width: w, height: session.previewHeight(), coverage: coverage.buffer };
+          transfer.push(coverage.buffer);
+        }
+        emit('progress', { ...p, preview }, transfer);
+      }
+      if (p.done || job.cancelled) break;
+      await tick();
+      if (job.cancelled) break;
+    }
+    return { cancelled: job.cancelled, result: session.result() };
+  } finally {
+    fits.delete(fitId);
+    session.free();
+  }
+}
+
+/** A handler's result whose buffers move to the page instead of being copied. */
+class Transfer {
+  constructor(result, buffers) {
+    this.result = result;
+    this.buffers = buffers;
+  }
+}
 
 function errorOf(err) {
   if (err instanceof WebAssembly.RuntimeError) {
@@ -43,7 +171,8 @@ async function dispatch(msg) {
   const emit = (event, data, transfer = []) => self.postMessage({ id, event, data }, transfer);
   try {
     const result = await handler(payload, emit);
-    self.postMessage({ id, ok: true, result });
+    if (result instanceof Transfer) self.postMessage({ id, ok: true, result: result.result }, result.buffers);
+    else self.postMessage({ id, ok: true, result });
   } catch (err) {
     const error = errorOf(err);
     self.postMessage({ id, ok: false, error });
@@ -56,7 +185,9 @@ async function dispatch(msg) {
 
 async function boot() {
   try {
-    const mod = await import('../pkg/procfit.js');
+    // Threads need SharedArrayBuffer, which needs a cross-origin isolated page (COOP/COEP);
+    // served without those headers, the single-threaded build runs instead.
+    const mod = await import(self.crossOriginIsolated ? '../pkg/procfit.js' : '../pkg-st/procfit.js');
     await mod.default();
     if (mod.threaded()) {
       if (!self.crossOriginIsolated) {

@@ -1,1 +1,60 @@
-//! The reconstruction pipeline: cameras from masks, coarse-to-fine fit, evaluation.
+//! The reconstruction pipeline (paper §3.2, §3.4): masks in, generator parameters and one
+//! camera per view out.
+//!
+//! - [`views`]: how a view is parameterised, how the single-view scale/distance ambiguity is
+//!   fixed, the field of view from EXIF, and the camera guesses made from each mask.
+//! - [`objective`]: eq. 1 (mean silhouette MSE over the views) and its gradient by eq. 2, as an
+//!   [`Objective`](crate::optim::Objective) for the optimisers.
+//! - [`session`]: the coarse-to-fine schedule (memetic at 128², Adam at 256² and 512²) as a
+//!   resumable [`Session`] for the page and the CLI.
+//! - [`eval`]: the paper's IoU over 64 turntable views.
+
+pub mod eval;
+pub mod objective;
+pub mod session;
+pub mod views;
+
+pub use eval::{align_to_reference, iou64, normalized};
+pub use objective::{FitObjective, Layout, render_coverage, resample_mask};
+pub use session::{FitConfig, FitResult, Progress, Session};
+pub use views::{CAMERA_DISTANCE, DEFAULT_FOV_Y, ViewVars, fov_from_focal_35mm};
+
+use crate::glb::ExportCamera;
+use std::fmt;
+
+/// A fit that cannot start or go on; the message says why, in one line.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FitError(pub String);
+
+impl fmt::Display for FitError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for FitError {}
+
+/// The glTF camera of a fitted view, in the model's frame: the renderer moves the object by
+/// `p ↦ t + s·R·p` in front of a fixed camera, so in the model's frame the camera sits at
+/// `Rᵀ(eye − t)/s` with orientation `Rᵀ·R_cam` (a pinhole camera's picture does not change when
+/// its frame is scaled about its centre, so the pose stays rigid).
+pub fn export_camera(view: &crate::camera::View, name: Option<String>) -> ExportCamera {
+    let r = view.params.rotation_and_derivatives()[0];
+    let rt = r.transpose();
+    let pos = rt * (view.pose.position - view.params.translation) / view.params.scale;
+    let rot = rt * view.pose.rotation;
+    let m = glam::DMat4::from_cols(
+        rot.x_axis.extend(0.0),
+        rot.y_axis.extend(0.0),
+        rot.z_axis.extend(0.0),
+        pos.extend(1.0),
+    );
+    ExportCamera {
+        name,
+        yfov: view.params.fov_y as f32,
+        aspect: view.width as f32 / view.height as f32,
+        znear: 0.01,
+        zfar: None,
+        camera_to_world: m.as_mat4().to_cols_array(),
+    }
+}

@@ -8,6 +8,12 @@ mod bench;
 use std::sync::Mutex;
 use wasm_bindgen::prelude::*;
 
+mod fit;
+mod mask;
+
+pub use fit::FitSession;
+pub use mask::MaskSession;
+
 #[cfg(feature = "threads")]
 pub use wasm_bindgen_rayon::init_thread_pool;
 
@@ -154,4 +160,125 @@ pub fn generator_specs() -> Result<JsValue, JsError> {
         })
         .collect();
     serde_wasm_bindgen::to_value(&specs).map_err(|e| JsError::new(&e.to_string()))
+}
+
+/// The model a params JSON text or a procfit GLB describes, as the page keeps it.
+#[derive(serde::Serialize)]
+struct ModelOut {
+    generator: &'static str,
+    params: Vec<f64>,
+    lod: u8,
+    seed: Option<u64>,
+}
+
+impl From<&crate::model::Model> for ModelOut {
+    fn from(m: &crate::model::Model) -> Self {
+        ModelOut {
+            generator: m.generator.name(),
+            params: m.params.clone(),
+            lod: m.lod as u8,
+            seed: m.seed,
+        }
+    }
+}
+
+/// The validated model for the page's `(generator, params, lod)`; every mistake is a message.
+fn model_of(generator: &str, params: &[f64], lod: u8) -> Result<crate::model::Model, JsError> {
+    let lod = crate::generators::Lod::from_index(usize::from(lod))
+        .ok_or_else(|| JsError::new(&format!("level of detail {lod} is not in 0..=3")))?;
+    crate::model::Model::new(generator, params, lod).map_err(|e| JsError::new(&e.to_string()))
+}
+
+/// Floats per camera in [`generate_glb`]'s `cameras`: vertical field of view (radians),
+/// aspect (width / height), then the 4×4 camera-to-world matrix in column-major order.
+pub const CAMERA_FLOATS: usize = 18;
+
+/// Generates the model's mesh and writes it as the very GLB the page downloads (generator state
+/// in the scene extras, one camera node per photo from `cameras`, see [`CAMERA_FLOATS`]). The
+/// viewer loads these bytes, so what is shown is what is saved.
+#[wasm_bindgen(js_name = generateGlb)]
+pub fn generate_glb(
+    generator: &str,
+    params: &[f64],
+    lod: u8,
+    cameras: &[f32],
+) -> Result<Vec<u8>, JsError> {
+    let model = model_of(generator, params, lod)?;
+    if !cameras.len().is_multiple_of(CAMERA_FLOATS) {
+        return Err(JsError::new(&format!(
+            "{} camera numbers is not a multiple of {CAMERA_FLOATS}",
+            cameras.len()
+        )));
+    }
+    let cameras: Vec<crate::glb::ExportCamera> = cameras
+        .chunks_exact(CAMERA_FLOATS)
+        .enumerate()
+        .map(|(i, c)| {
+            let mut camera_to_world = [0.0; 16];
+            camera_to_world.copy_from_slice(&c[2..]);
+            crate::glb::ExportCamera {
+                name: Some(format!("photo {}", i + 1)),
+                yfov: c[0],
+                aspect: c[1],
+                znear: 0.01,
+                zfar: None,
+                camera_to_world,
+            }
+        })
+        .collect();
+    crate::glb::export_model(&model, &cameras).map_err(|e| JsError::new(&e.to_string()))
+}
+
+/// The paper's IoU-64 (mean silhouette IoU over 64 turntable views at `side`², both meshes
+/// normalised to a unit box) between two models at level of detail `lod`: the benchmark's
+/// measure of how well a fit recovered a known shape.
+#[wasm_bindgen(js_name = iou64Models)]
+pub fn iou64_models(
+    generator_a: &str,
+    params_a: &[f64],
+    generator_b: &str,
+    params_b: &[f64],
+    lod: u8,
+    side: u32,
+) -> Result<f64, JsError> {
+    if !(16..=1024).contains(&side) {
+        return Err(JsError::new("side must be in 16..=1024"));
+    }
+    let mesh = |g: &str, p: &[f64]| {
+        let m = model_of(g, p, lod)?;
+        m.generator
+            .generate(&m.params, m.lod)
+            .map_err(|e| JsError::new(&e.to_string()))
+    };
+    let a = mesh(generator_a, params_a)?;
+    let b = mesh(generator_b, params_b)?;
+    crate::reconstruct::iou64(
+        (&a.positions, &a.triangles),
+        (&b.positions, &b.triangles),
+        side,
+    )
+    .map_err(|e| JsError::new(&e.to_string()))
+}
+
+/// The params JSON of a model (what "download params" saves).
+#[wasm_bindgen(js_name = paramsJson)]
+pub fn params_json(generator: &str, params: &[f64], lod: u8) -> Result<String, JsError> {
+    Ok(model_of(generator, params, lod)?.to_json())
+}
+
+/// Opens a file the user gave to continue editing: a procfit GLB (told by its magic) or params
+/// JSON. Returns `{ generator, params, lod, seed }` with the parameters validated and clamped;
+/// a GLB from another tool, or JSON that is not procfit's, is an error saying so.
+#[wasm_bindgen(js_name = openModel)]
+pub fn open_model(bytes: &[u8]) -> Result<JsValue, JsError> {
+    let model = if bytes.starts_with(b"glTF") {
+        crate::glb::import_glb(bytes)
+            .and_then(|g| g.model())
+            .map_err(|e| JsError::new(&e.to_string()))?
+    } else {
+        let text = std::str::from_utf8(bytes)
+            .map_err(|_| JsError::new("the file is neither a GLB nor params JSON text"))?;
+        crate::model::Model::from_json(text).map_err(|e| JsError::new(&e.to_string()))?
+    };
+    serde_wasm_bindgen::to_value(&ModelOut::from(&model)).map_err(|e| JsError::new(&e.to_string()))
 }

@@ -44,9 +44,14 @@ test('the worker answers ping with the crate version and a threaded build', asyn
 test('the rayon pool really runs on more than one thread', async () => {
   const hw = await page.evaluate(() => navigator.hardwareConcurrency);
   assert.ok(hw >= 2, `the test machine has ${hw} hardware threads; the check needs 2`);
-  const { threads } = await page.evaluate(() =>
-    window.procfit.client.call(window.procfit.REQUESTS.THREAD_PROBE, { jobs: 64 }),
-  );
+  // On a loaded machine (CI shares 2 cores) one pool thread can be descheduled for the whole
+  // probe; a pool that works shows > 1 thread within a few tries, a broken one never does.
+  let threads = 0;
+  for (let attempt = 0; attempt < 3 && threads < 2; attempt += 1) {
+    ({ threads } = await page.evaluate(() =>
+      window.procfit.client.call(window.procfit.REQUESTS.THREAD_PROBE, { jobs: 64 }),
+    ));
+  }
   console.log(`# rayon pool threads seen in the browser: ${threads} (hardwareConcurrency ${hw})`);
   assert.ok(threads > 1, `only ${threads} distinct pool thread(s) ran the jobs`);
 });

@@ -1,0 +1,91 @@
+//! Benchmark of the whole fit at the default budget (quality 1): wall time and IoU-64 for a
+//! mug (the measured, lathed one — not the generator's), a bowl (a non-preset dish) and a
+//! building (a non-preset one), each from one 512² mask, on 1 and 2 threads. Prints a markdown
+//! table of medians over several random cameras. Run with `cargo bench --bench reconstruct`.
+
+#[path = "../tests/reconstruct_support/mod.rs"]
+mod support;
+
+use procfit::generators::{Lod, Mesh};
+use procfit::optim::Rng;
+use procfit::reconstruct::FitConfig;
+use std::time::Instant;
+use support::*;
+
+/// Random cameras per object (each fitted once per thread count).
+const CAMERAS: usize = 4;
+// PROCFIT_QUALITY=q scales the budget (default 1).
+const SIDE: u32 = 512;
+
+fn main() {
+    let mut rng = Rng::new(2024);
+    let mug = measured_mug();
+    // A bowl no preset describes: the bowl body, wider at the base, a little taller.
+    let mut bowl_x = generator("dish").preset("bowl").unwrap().values;
+    for (i, r) in bowl_x.iter_mut().enumerate().take(9) {
+        *r += 0.4 - 0.05 * i as f64;
+    }
+    bowl_x[9] *= 1.15;
+    let bowl = mesh_of("dish", &bowl_x, Lod::High);
+    let building = mesh_of("building", &random_building(&mut Rng::new(1)), Lod::High);
+    let cases: Vec<(&str, &str, Mesh)> = vec![
+        ("mug (measured, OBJ)", "dish", mug),
+        ("bowl", "dish", bowl),
+        ("building", "building", building),
+    ];
+    println!(
+        "| object | threads | wall time median (min–max) over {CAMERAS} cameras | evaluations | IoU-64 mean (min–max) |"
+    );
+    println!("|---|---|---|---|---|");
+    for (name, g, mesh) in &cases {
+        let truths: Vec<_> = (0..CAMERAS)
+            .map(|_| random_view_at(&mut rng, mesh, 0.5, 0.0))
+            .collect();
+        let masks: Vec<_> = truths.iter().map(|t| render_mask(mesh, t, SIDE)).collect();
+        let mut first_params = None;
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let (mut times, mut ious, mut evals, mut params) = (vec![], vec![], 0, vec![]);
+            for (truth, mask) in truths.iter().zip(&masks) {
+                let t0 = Instant::now();
+                let r = pool.install(|| {
+                    fit(
+                        FitConfig {
+                            generator: g.to_string(),
+                            fov_y: vec![Some(0.5)],
+                            quality: std::env::var("PROCFIT_QUALITY")
+                                .ok()
+                                .and_then(|q| q.parse().ok())
+                                .unwrap_or(1.0),
+                            ..FitConfig::default()
+                        },
+                        vec![mask.clone()],
+                    )
+                });
+                times.push(t0.elapsed().as_secs_f64());
+                ious.push(fit_iou64(&r, mesh, truth));
+                evals = r.evaluations;
+                params.push(r.model.params.clone());
+            }
+            // Same seed, same result whatever the thread count.
+            match &first_params {
+                None => first_params = Some(params),
+                Some(p) => assert_eq!(p, &params, "{name}: threads changed the fit"),
+            }
+            times.sort_by(f64::total_cmp);
+            let mean = ious.iter().sum::<f64>() / ious.len() as f64;
+            let (lo, hi) = ious
+                .iter()
+                .fold((1.0f64, 0.0f64), |(a, b), &v| (a.min(v), b.max(v)));
+            println!(
+                "| {name} | {threads} | {:.2} s ({:.2}–{:.2}) | {evals} | {mean:.3} ({lo:.3}–{hi:.3}) |",
+                times[times.len() / 2],
+                times[0],
+                times[times.len() - 1],
+            );
+        }
+    }
+}

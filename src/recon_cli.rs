@@ -1,0 +1,348 @@
+//! The CLI's reconstruction subcommands: `reconstruct`, `render` and `eval` (kept apart from
+//! `main.rs` so the subcommands of other rooms merge cleanly). Every error is one line.
+
+use clap::Args;
+use procfit::generators::{self, Lod, Mesh};
+use procfit::glb::{self, ExportCamera};
+use procfit::mask::Mask;
+use procfit::model::Model;
+use procfit::reconstruct::views::ViewVars;
+use procfit::reconstruct::{self, FitConfig, Session, eval};
+use procfit::segment::{self, Photo};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// `procfit reconstruct`.
+#[derive(Args)]
+pub struct ReconstructArgs {
+    /// Generator: dish, building or auto (tries every differentiable generator).
+    #[arg(long, default_value = "auto")]
+    generator: String,
+    /// Seed of the fit (same seed, same result).
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Stage-1 evaluations (default 5000 × quality).
+    #[arg(long)]
+    budget: Option<usize>,
+    /// Quality/speed knob: multiplies every stage's budget.
+    #[arg(long, default_value_t = 1.0)]
+    quality: f64,
+    /// Vertical field of view of every image, radians (default: 0.47, a 50 mm lens).
+    #[arg(long)]
+    fov: Option<f64>,
+    /// Photos (segmented automatically) or mask images (white or opaque = object), one per
+    /// view, all the same size.
+    #[arg(required = true)]
+    images: Vec<PathBuf>,
+    /// Output .glb path.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Also write the parameters as params JSON here.
+    #[arg(long)]
+    params_out: Option<PathBuf>,
+}
+
+/// `procfit render`.
+#[derive(Args)]
+pub struct RenderArgs {
+    /// Generator machine name.
+    #[arg(long)]
+    generator: String,
+    /// A preset of the generator.
+    #[arg(long, conflicts_with = "params", required_unless_present = "params")]
+    preset: Option<String>,
+    /// A params JSON file.
+    #[arg(long)]
+    params: Option<PathBuf>,
+    /// Camera JSON: {"yaw", "pitch", "roll", "tx", "ty", "log_scale", "fov_y"} (object spin,
+    /// camera elevation and tilt in radians, translation, log of the object scale; the camera
+    /// is 3 units in front of the object's origin). Missing fields take defaults.
+    #[arg(long)]
+    camera: PathBuf,
+    /// Image size: W or WxH.
+    #[arg(long)]
+    size: String,
+    /// Output PNG path.
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+/// `procfit eval`.
+#[derive(Args)]
+pub struct EvalArgs {
+    /// Reference mesh (OBJ or GLB).
+    #[arg(long)]
+    reference: PathBuf,
+    /// The model GLB (e.g. written by `procfit reconstruct`).
+    model: PathBuf,
+    /// The mask of input view 0, to also print the input-view IoU through the model's first
+    /// camera.
+    #[arg(long)]
+    mask: Option<PathBuf>,
+}
+
+fn read(path: &Path) -> Result<Vec<u8>, String> {
+    std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))
+}
+
+/// A mask from an image file: a mask image when it is grey and nearly binary or has
+/// transparency, else a photo segmented automatically.
+fn load_mask(path: &Path) -> Result<Mask, String> {
+    let bytes = read(path)?;
+    let img = image::load_from_memory(&bytes)
+        .map_err(|e| format!("{}: not a readable image ({e})", path.display()))?;
+    let rgba = img.to_rgba8();
+    let (w, h) = rgba.dimensions();
+    let px = rgba.as_raw();
+    let transparent = px.chunks_exact(4).any(|p| p[3] < 128);
+    if transparent {
+        let v = px.chunks_exact(4).map(|p| p[3]).collect::<Vec<_>>();
+        return Mask::from_luma8(w, h, &v).map_err(|e| format!("{}: {e}", path.display()));
+    }
+    let grey = px.chunks_exact(4).all(|p| p[0] == p[1] && p[1] == p[2]);
+    let binary = px
+        .chunks_exact(4)
+        .filter(|p| p[0] < 16 || p[0] > 239)
+        .count()
+        >= px.len() / 4 * 95 / 100;
+    if grey && binary {
+        let v = px.chunks_exact(4).map(|p| p[0]).collect::<Vec<_>>();
+        return Mask::from_luma8(w, h, &v).map_err(|e| format!("{}: {e}", path.display()));
+    }
+    let photo = Photo::decode(&bytes, segment::WORKING_SIDE)
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    let seg = segment::segment_auto(&photo).map_err(|e| format!("{}: {e}", path.display()))?;
+    for w in &seg.warnings {
+        eprintln!("procfit: {}: {w}", path.display());
+    }
+    Ok(seg.mask)
+}
+
+fn seconds(s: f64) -> String {
+    if s < 60.0 {
+        format!("{s:.0}s")
+    } else {
+        format!("{}m{:02.0}s", (s / 60.0).floor(), s % 60.0)
+    }
+}
+
+/// `procfit reconstruct`: fit, progress on stderr, GLB (and params JSON) out.
+pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
+    let masks = a
+        .images
+        .iter()
+        .map(|p| load_mask(p))
+        .collect::<Result<Vec<_>, _>>()?;
+    let config = FitConfig {
+        generator: a.generator.clone(),
+        seed: a.seed,
+        quality: a.quality,
+        budget: a.budget,
+        fov_y: vec![a.fov; masks.len()],
+        ..FitConfig::default()
+    };
+    let mut session = Session::new(config, masks).map_err(|e| e.to_string())?;
+    let start = Instant::now();
+    let mut last_draw = 0.0f64;
+    let mut stderr = std::io::stderr();
+    loop {
+        let p = session.step();
+        let t = start.elapsed().as_secs_f64();
+        if p.done || t - last_draw > 0.2 {
+            last_draw = t;
+            let frac = if p.work_total > 0.0 {
+                (p.work_done / p.work_total).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let eta = if frac > 0.02 {
+                seconds(t / frac - t)
+            } else {
+                "?".into()
+            };
+            let bar: String = (0..30)
+                .map(|i| if (i as f64) < frac * 30.0 { '#' } else { '.' })
+                .collect();
+            let _ = write!(
+                stderr,
+                "\r{} stage {}/3 [{bar}] {:>3.0}% {} evals, loss {:.5}, ETA {eta}   ",
+                p.generator,
+                p.stage,
+                100.0 * frac,
+                p.evaluations,
+                p.best_loss
+            );
+            let _ = stderr.flush();
+        }
+        if p.done {
+            break;
+        }
+    }
+    let _ = writeln!(stderr);
+    let result = session.result().map_err(|e| e.to_string())?;
+    let model = Model {
+        lod: Lod::High,
+        ..result.model.clone()
+    };
+    let cameras: Vec<ExportCamera> = result
+        .views
+        .iter()
+        .zip(&a.images)
+        .map(|(v, p)| {
+            let name = p.file_name().map(|n| n.to_string_lossy().into_owned());
+            reconstruct::export_camera(v, name)
+        })
+        .collect();
+    let glb = glb::export_model(&model, &cameras).map_err(|e| e.to_string())?;
+    std::fs::write(&a.output, &glb)
+        .map_err(|e| format!("cannot write {}: {e}", a.output.display()))?;
+    if let Some(path) = &a.params_out {
+        std::fs::write(path, model.to_json())
+            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    }
+    println!(
+        "wrote {}: {} fitted to {} view(s) in {:.1} s, {} evaluations, loss {:.5}",
+        a.output.display(),
+        model.generator.name(),
+        result.views.len(),
+        start.elapsed().as_secs_f64(),
+        result.evaluations,
+        result.loss
+    );
+    Ok(())
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("size `{s}` is not W or WxH with sides in 1..=8192");
+    let (w, h) = match s.split_once(['x', 'X']) {
+        Some((w, h)) => (w.parse::<u32>(), h.parse::<u32>()),
+        None => (s.parse::<u32>(), s.parse::<u32>()),
+    };
+    let (w, h) = (w.map_err(|_| bad())?, h.map_err(|_| bad())?);
+    if !(1..=8192).contains(&w) || !(1..=8192).contains(&h) {
+        return Err(bad());
+    }
+    Ok((w, h))
+}
+
+fn model_from(
+    generator: &str,
+    preset: Option<&str>,
+    params: Option<&Path>,
+) -> Result<Model, String> {
+    let g = generators::by_name(generator)
+        .ok_or_else(|| format!("unknown generator `{generator}` (see `procfit generators`)"))?;
+    match (preset, params) {
+        (Some(name), _) => {
+            let p = g
+                .preset(name)
+                .ok_or_else(|| format!("{generator} has no preset `{name}`"))?;
+            Model::new(generator, &p.values, Lod::High).map_err(|e| e.to_string())
+        }
+        (None, Some(path)) => {
+            let text = std::fs::read_to_string(path)
+                .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+            let m = Model::from_json(&text).map_err(|e| format!("{}: {e}", path.display()))?;
+            if m.generator.name() != generator {
+                return Err(format!(
+                    "{} holds parameters for `{}`, not `{generator}`",
+                    path.display(),
+                    m.generator.name()
+                ));
+            }
+            Ok(m)
+        }
+        (None, None) => Err("give --preset or --params".into()),
+    }
+}
+
+/// `procfit render`: a silhouette PNG (white object on black).
+pub fn render(a: &RenderArgs) -> Result<(), String> {
+    let model = model_from(&a.generator, a.preset.as_deref(), a.params.as_deref())?;
+    let text = std::fs::read_to_string(&a.camera)
+        .map_err(|e| format!("cannot read {}: {e}", a.camera.display()))?;
+    let vars: ViewVars = serde_json::from_str(&text)
+        .map_err(|e| format!("{}: camera JSON: {e}", a.camera.display()))?;
+    let (w, h) = parse_size(&a.size)?;
+    let view = vars.view(w, h);
+    view.params
+        .validate()
+        .map_err(|e| format!("{}: {e}", a.camera.display()))?;
+    let mesh = model
+        .generator
+        .generate(&model.params, model.lod)
+        .map_err(|e| e.to_string())?;
+    let coverage = reconstruct::render_coverage(&mesh, &view)?;
+    let luma: Vec<u8> = coverage
+        .iter()
+        .map(|&c| (c * 255.0).round() as u8)
+        .collect();
+    let img = image::GrayImage::from_raw(w, h, luma).ok_or("internal: image size mismatch")?;
+    img.save(&a.output)
+        .map_err(|e| format!("cannot write {}: {e}", a.output.display()))?;
+    println!("wrote {}: {w}×{h}", a.output.display());
+    Ok(())
+}
+
+/// `procfit eval`: IoU-64 between a model GLB and a reference.
+pub fn eval(a: &EvalArgs) -> Result<(), String> {
+    let reference = glb::import_reference(&read(&a.reference)?)
+        .map_err(|e| format!("{}: {e}", a.reference.display()))?;
+    let model =
+        glb::import_glb(&read(&a.model)?).map_err(|e| format!("{}: {e}", a.model.display()))?;
+    let m = &model.reference;
+    if m.triangles.is_empty() {
+        return Err(format!("{}: the model has no triangles", a.model.display()));
+    }
+    // Without a known pose of the reference both are taken upright (Y up) and the model's turn
+    // about Y is found by search at low resolution.
+    let turned = |angle: f32| -> Vec<glam::Vec3> {
+        let q = glam::Quat::from_rotation_y(angle);
+        m.positions.iter().map(|&p| q * p).collect()
+    };
+    let r = (&reference.positions[..], &reference.triangles[..]);
+    let mut best = (0.0f32, -1.0f64);
+    for k in 0..16 {
+        let angle = std::f32::consts::TAU * k as f32 / 16.0;
+        let iou = eval::turntable_iou((&turned(angle), &m.triangles), r, 64, 16)
+            .map_err(|e| e.to_string())?;
+        if iou > best.1 {
+            best = (angle, iou);
+        }
+    }
+    let iou = eval::iou64((&turned(best.0), &m.triangles), r, eval::EVAL_SIDE)
+        .map_err(|e| e.to_string())?;
+    println!(
+        "IoU-64: {iou:.4} (model turned {:.1}° about Y)",
+        best.0.to_degrees()
+    );
+    if let Some(mask_path) = &a.mask {
+        let mask = load_mask(mask_path)?;
+        let cam = model
+            .cameras
+            .first()
+            .ok_or_else(|| format!("{}: the model has no camera", a.model.display()))?;
+        let mat = glam::Mat4::from_cols_array(&cam.camera_to_world).as_dmat4();
+        let view = procfit::camera::View {
+            width: mask.width(),
+            height: mask.height(),
+            pose: procfit::camera::CameraPose {
+                rotation: glam::DMat3::from_mat4(mat),
+                position: mat.w_axis.truncate(),
+            },
+            params: procfit::camera::ViewParams {
+                fov_y: f64::from(cam.yfov),
+                ..Default::default()
+            },
+        };
+        let mesh = Mesh {
+            positions: m.positions.clone(),
+            triangles: m.triangles.clone(),
+            ..Mesh::default()
+        };
+        let v = eval::view_iou(&mesh, &view, &mask).map_err(|e| e.to_string())?;
+        println!("input-view IoU: {v:.4}");
+    }
+    Ok(())
+}

@@ -1,0 +1,763 @@
+//! The coarse-to-fine fit as a resumable session (paper §3.4, notes "Optimisers and
+//! schedule"), for the page's worker and the CLI alike:
+//!
+//! 1. **Stage 1**: the memetic algorithm at 128² and LOW detail, from the generator's seeds ×
+//!    camera guesses per view ([`super::views`]). With `auto`, a short stage 1 runs for every
+//!    differentiable generator and the best one continues with the rest of the budget.
+//! 2. **Stage 2**: Adam at 256² and MEDIUM detail (lr 0.01), with the regulariser.
+//! 3. **Stage 3**: Adam at 512² and HIGH detail (lr 0.0075), with the regulariser.
+//!
+//! [`Session::step`] does one bounded slice of work (one memetic batch, or a few Adam
+//! iterations) and returns a [`Progress`]; cancelling is simply not stepping any more, and
+//! [`Session::result`] gives the best model so far at any time. The session never reads a
+//! clock (library code runs on wasm32); callers time it. A run is deterministic for a seed.
+
+use super::FitError;
+use super::objective::{FitObjective, Layout, render_coverage, resample_mask};
+use super::views::{DEFAULT_FOV_Y, MaskStats, fit_box, mask_stats, view_domain};
+use crate::camera::{View, ViewParams};
+use crate::generators::{self, Generator, Lod};
+use crate::mask::Mask;
+use crate::model::Model;
+use crate::optim::{Adam, AdamConfig, Domain, Memetic, MemeticConfig, Objective, Var};
+
+/// Stage-1 evaluations at quality 1: the reference schedule's ~5000 at 128² (notes "Optimisers
+/// and schedule"). Measured (benches/reconstruct.rs): buildings gain from it (mean IoU-64 0.89 →
+/// 0.96 over 2000), dishes are limited by what one view can tell, and a fit takes ~2–3 s
+/// natively.
+pub const DEFAULT_EVALUATIONS: usize = 5000;
+
+/// Largest number of input views.
+pub const MAX_VIEWS: usize = 16;
+
+/// Side of the preview silhouette in [`Progress::preview`].
+pub const PREVIEW_SIDE: u32 = 128;
+
+/// Adam iterations per [`Session::step`] in stages 2 and 3.
+const ADAM_SLICE: usize = 5;
+
+/// What to fit and how hard to try.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FitConfig {
+    /// Generator machine name, or `auto`.
+    pub generator: String,
+    /// Seed of every random choice.
+    pub seed: u64,
+    /// Quality/speed knob: multiplies every stage's budget (1 = default; 0.25 a quick preview,
+    /// 4 a thorough fit).
+    pub quality: f64,
+    /// Stage-1 evaluations, overriding `quality`'s for that stage.
+    pub budget: Option<usize>,
+    /// Vertical field of view per view (from EXIF or the user); missing or `None` entries take
+    /// [`DEFAULT_FOV_Y`].
+    pub fov_y: Vec<Option<f64>>,
+    /// Also fit each view's field of view.
+    pub fit_fov: bool,
+    /// Weight of the generator's regulariser in stages 2 and 3 (relative to the MSE).
+    pub reg_weight: f64,
+    /// Resolution (longer side) of the stages, coarse to fine.
+    pub resolutions: [u32; 3],
+    /// Level of detail of the stages.
+    pub lods: [Lod; 3],
+}
+
+impl Default for FitConfig {
+    fn default() -> Self {
+        FitConfig {
+            generator: "auto".into(),
+            seed: 0,
+            quality: 1.0,
+            budget: None,
+            fov_y: Vec::new(),
+            fit_fov: false,
+            reg_weight: 1e-4,
+            resolutions: [128, 256, 512],
+            // The paper runs stage 1 at LOW detail. Our dish's LOW mesh (12 sectors) is so
+            // polygonal that, measured on random dishes, the true shape scored worse at 128² than
+            // a wrong camera pitch; MEDIUM (24 sectors) does not have that problem.
+            lods: [Lod::Low, Lod::Medium, Lod::High],
+        }
+    }
+}
+
+/// Where a session stands after a step.
+#[derive(Clone, Debug)]
+pub struct Progress {
+    /// Stage 1, 2 or 3 (3 and `done` at the end).
+    pub stage: u8,
+    /// The generator being fitted (during `auto`'s stage 1, the one being tried).
+    pub generator: &'static str,
+    /// Generation (stage 1) or Adam iteration (stages 2, 3) within the stage.
+    pub iteration: usize,
+    /// Loss evaluations so far, all stages.
+    pub evaluations: usize,
+    /// Work done and planned in 128²-evaluation equivalents (for a progress bar / ETA).
+    pub work_done: f64,
+    /// See `work_done`.
+    pub work_total: f64,
+    /// Best loss of the current stage (stages use different resolutions, so losses of
+    /// different stages do not compare).
+    pub best_loss: f64,
+    /// Best generator parameters so far.
+    pub params: Vec<f64>,
+    /// Best camera (object transform and intrinsics) of each view so far.
+    pub cameras: Vec<ViewParams>,
+    /// The best silhouette seen from view 0, at most [`PREVIEW_SIDE`] a side.
+    pub preview: Option<Mask>,
+    /// The fit is finished.
+    pub done: bool,
+}
+
+/// The outcome of a fit.
+#[derive(Clone, Debug)]
+pub struct FitResult {
+    /// The generator and its parameters (at MEDIUM detail for export by default).
+    pub model: Model,
+    /// One fitted view per input mask, at the mask's size.
+    pub views: Vec<View>,
+    /// Loss of the last stage that ran.
+    pub loss: f64,
+    /// Evaluations spent.
+    pub evaluations: usize,
+}
+
+/// One generator's stage-1 search.
+struct Search {
+    generator: &'static dyn Generator,
+    objective: FitObjective,
+    memetic: Memetic,
+}
+
+/// A gradient stage in progress.
+struct AdamStage {
+    stage: u8,
+    objective: FitObjective,
+    domain: Domain,
+    adam: Adam,
+    x: Vec<f64>,
+    grad: Vec<f64>,
+    best: (Vec<f64>, f64),
+    iteration: usize,
+    iterations: usize,
+    decay: f64,
+}
+
+enum Phase {
+    Search,
+    Adam(Box<AdamStage>),
+    Done,
+}
+
+/// A best point: its generator, layout, values, loss and the stage that found it.
+#[derive(Clone)]
+struct Best {
+    generator: &'static dyn Generator,
+    layout: Layout,
+    x: Vec<f64>,
+    loss: f64,
+    stage: u8,
+}
+
+/// A fit in progress.
+pub struct Session {
+    config: FitConfig,
+    masks: Vec<Mask>,
+    fov: Vec<f64>,
+    searches: Vec<Search>,
+    /// Index of the search being stepped; after the `auto` round, the chosen one.
+    current: usize,
+    /// Stage-1 evaluations each search gets before `auto` picks (all of them when only one).
+    short_budget: usize,
+    chosen: bool,
+    phase: Phase,
+    /// Best of the finished stages.
+    best: Option<Best>,
+    evaluations: usize,
+    stage_iterations: [usize; 2],
+    work_done: f64,
+    work_total: f64,
+}
+
+/// Relative cost of one evaluation at `side` compared to 128² (pixels, roughly).
+fn work_weight(side: u32) -> f64 {
+    let r = f64::from(side) / 128.0;
+    r * r
+}
+
+impl Session {
+    /// Starts a fit of `masks` (one per view, all the same size). Nothing is evaluated yet.
+    /// Errors on an unknown or non-differentiable generator, no masks or too many, masks of
+    /// different sizes, empty or all-object masks, too small images, and bad settings.
+    pub fn new(config: FitConfig, masks: Vec<Mask>) -> Result<Session, FitError> {
+        if masks.is_empty() {
+            return Err(FitError("no masks to fit".into()));
+        }
+        if masks.len() > MAX_VIEWS {
+            return Err(FitError(format!(
+                "{} views; at most {MAX_VIEWS} are supported",
+                masks.len()
+            )));
+        }
+        let (w0, h0) = (masks[0].width(), masks[0].height());
+        if let Some((i, m)) = masks
+            .iter()
+            .enumerate()
+            .find(|(_, m)| (m.width(), m.height()) != (w0, h0))
+        {
+            return Err(FitError(format!(
+                "mask {i} is {}×{} but mask 0 is {w0}×{h0}; all views must have the same size",
+                m.width(),
+                m.height()
+            )));
+        }
+        if !(config.quality.is_finite() && config.quality > 0.0 && config.quality <= 100.0) {
+            return Err(FitError(format!(
+                "quality {} is not in (0, 100]",
+                config.quality
+            )));
+        }
+        if config.budget == Some(0) {
+            return Err(FitError("the evaluation budget must be at least 1".into()));
+        }
+        if !(config.reg_weight.is_finite() && config.reg_weight >= 0.0) {
+            return Err(FitError("the regulariser weight must be ≥ 0".into()));
+        }
+        if config.resolutions.iter().any(|&r| !(8..=4096).contains(&r)) {
+            return Err(FitError("stage resolutions must be within 8..=4096".into()));
+        }
+        let stats = masks
+            .iter()
+            .enumerate()
+            .map(|(i, m)| mask_stats(m, i))
+            .collect::<Result<Vec<_>, _>>()?;
+        let fov = (0..masks.len())
+            .map(|i| {
+                let f = config
+                    .fov_y
+                    .get(i)
+                    .copied()
+                    .flatten()
+                    .unwrap_or(DEFAULT_FOV_Y);
+                if f.is_finite() && f > 0.05 && f < 3.0 {
+                    Ok(f)
+                } else {
+                    Err(FitError(format!(
+                        "field of view {f} rad for view {i} is not in (0.05, 3)"
+                    )))
+                }
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let candidates: Vec<&'static dyn Generator> = if config.generator == "auto" {
+            generators::all()
+                .into_iter()
+                .filter(|g| g.differentiable())
+                .collect()
+        } else {
+            let g = generators::by_name(&config.generator)
+                .ok_or_else(|| FitError(format!("unknown generator `{}`", config.generator)))?;
+            if !g.differentiable() {
+                return Err(FitError(format!(
+                    "generator `{}` is not differentiable; it cannot be fitted here",
+                    g.name()
+                )));
+            }
+            vec![g]
+        };
+        if candidates.is_empty() {
+            return Err(FitError("no differentiable generator is built in".into()));
+        }
+        let stage1 = config
+            .budget
+            .unwrap_or(((DEFAULT_EVALUATIONS as f64) * config.quality).round() as usize)
+            .max(1);
+        let short_budget = if candidates.len() > 1 {
+            (stage1 * 3 / (4 * candidates.len())).max(1)
+        } else {
+            stage1
+        };
+        let small: Vec<Mask> = masks
+            .iter()
+            .map(|m| resample_mask(m, config.resolutions[0]))
+            .collect();
+        let mut searches = Vec::new();
+        for (k, &g) in candidates.iter().enumerate() {
+            let (layout, domain, seeds) = start_points(g, &stats, &fov, config.fit_fov)?;
+            let objective = FitObjective::new(g, config.lods[0], layout, small.clone(), 0.0, false);
+            let memetic = Memetic::new(
+                domain,
+                &seeds,
+                MemeticConfig {
+                    max_evaluations: short_budget,
+                    seed: config.seed.wrapping_add(k as u64),
+                    ..MemeticConfig::default()
+                },
+            )
+            .map_err(|e| FitError(e.to_string()))?;
+            searches.push(Search {
+                generator: g,
+                objective,
+                memetic,
+            });
+        }
+        let q = config.quality;
+        let stage_iterations = [
+            ((100.0 * q).round() as usize).max(1),
+            ((60.0 * q).round() as usize).max(1),
+        ];
+        let long = w0.max(h0);
+        let side = |i: usize| config.resolutions[i].min(long);
+        let work_total = stage1 as f64 * work_weight(side(0))
+            + stage_iterations[0] as f64 * work_weight(side(1)) * 2.0
+            + stage_iterations[1] as f64 * work_weight(side(2)) * 2.0;
+        Ok(Session {
+            config,
+            masks,
+            fov,
+            searches,
+            current: 0,
+            short_budget,
+            chosen: candidates.len() == 1,
+            phase: Phase::Search,
+            best: None,
+            evaluations: 0,
+            stage_iterations,
+            work_done: 0.0,
+            work_total,
+        })
+    }
+
+    fn stage_side(&self, i: usize) -> u32 {
+        let long = self.masks[0].width().max(self.masks[0].height());
+        self.config.resolutions[i].min(long)
+    }
+
+    /// Whether the fit is finished.
+    pub fn is_done(&self) -> bool {
+        matches!(self.phase, Phase::Done)
+    }
+
+    /// Does one bounded slice of work and reports progress. After the end it only reports.
+    pub fn step(&mut self) -> Progress {
+        match std::mem::replace(&mut self.phase, Phase::Done) {
+            Phase::Search => self.step_search(),
+            Phase::Adam(stage) => self.step_adam(stage),
+            Phase::Done => {}
+        }
+        self.progress()
+    }
+
+    /// Steps until done and returns the result.
+    pub fn run(&mut self) -> Result<FitResult, FitError> {
+        while !self.step().done {}
+        self.result()
+    }
+
+    fn step_search(&mut self) {
+        let side = self.stage_side(0);
+        let search = &mut self.searches[self.current];
+        let before = search.memetic.status().evaluations;
+        let status = search.memetic.step(&search.objective);
+        let spent = status.evaluations - before;
+        self.evaluations += spent;
+        self.work_done += spent as f64 * work_weight(side);
+        self.phase = Phase::Search;
+        if !status.done {
+            return;
+        }
+        if !self.chosen {
+            if self.current + 1 < self.searches.len() {
+                self.current += 1;
+                return;
+            }
+            // `auto`: continue the best generator with the rest of the stage-1 budget.
+            let best = (0..self.searches.len())
+                .min_by(|&a, &b| {
+                    let va = self.searches[a].memetic.status().best_value;
+                    let vb = self.searches[b].memetic.status().best_value;
+                    va.total_cmp(&vb)
+                })
+                .unwrap_or(0);
+            self.current = best;
+            self.chosen = true;
+            let total = self
+                .config
+                .budget
+                .unwrap_or(((DEFAULT_EVALUATIONS as f64) * self.config.quality).round() as usize);
+            let rest = total.saturating_sub(self.short_budget * self.searches.len());
+            if rest > 0 {
+                self.searches[best].memetic.extend_budget(rest);
+                return;
+            }
+        }
+        let search = &self.searches[self.current];
+        let Some(best) = search.memetic.best() else {
+            self.phase = Phase::Done;
+            return;
+        };
+        self.best = Some(Best {
+            generator: search.generator,
+            layout: search.objective.layout().clone(),
+            x: best.x.clone(),
+            loss: best.value,
+            stage: 1,
+        });
+        // The best few distinct individuals of stage 1 (the best first).
+        let mut pop: Vec<&crate::optim::Individual> = search.memetic.population().iter().collect();
+        pop.sort_by(|a, b| a.value.total_cmp(&b.value));
+        let mut starts: Vec<Vec<f64>> = vec![best.x.clone()];
+        for ind in pop {
+            if starts.len() >= PROBES {
+                break;
+            }
+            if !starts.contains(&ind.x) {
+                starts.push(ind.x.clone());
+            }
+        }
+        let specs = search.generator.params();
+        self.phase = self.start_adam(2, best.x.clone());
+        if let Phase::Adam(stage) = &mut self.phase {
+            let side =
+                self.config.resolutions[1].min(self.masks[0].width().max(self.masks[0].height()));
+            let (x, spent) = probe(&stage.objective, &stage.domain, specs, starts);
+            stage.x = x;
+            self.evaluations += spent;
+            self.work_done += 2.0 * spent as f64 * work_weight(side);
+        }
+    }
+
+    /// Builds gradient stage `stage` (2 or 3) from point `x`.
+    fn start_adam(&self, stage: u8, x: Vec<f64>) -> Phase {
+        let search = &self.searches[self.current];
+        let g = search.generator;
+        let i = usize::from(stage - 1);
+        let lod = self.config.lods[i];
+        let lr = if stage == 2 { 0.01 } else { 0.0075 };
+        let masks = self
+            .masks
+            .iter()
+            .map(|m| resample_mask(m, self.config.resolutions[i]))
+            .collect();
+        let objective = FitObjective::new(
+            g,
+            lod,
+            search.objective.layout().clone(),
+            masks,
+            self.config.reg_weight,
+            true,
+        );
+        let domain = search.memetic.domain().clone();
+        let adam = Adam::new(
+            &domain,
+            &AdamConfig {
+                lr,
+                ..AdamConfig::default()
+            },
+        );
+        let iterations = self.stage_iterations[i - 1];
+        let n = x.len();
+        Phase::Adam(Box::new(AdamStage {
+            stage,
+            objective,
+            domain,
+            adam,
+            x,
+            grad: vec![0.0; n],
+            best: (Vec::new(), f64::INFINITY),
+            iteration: 0,
+            iterations,
+            // The step shrinks to a fifth over the stage, so it ends finer than it starts.
+            decay: 0.2f64.powf(1.0 / iterations as f64),
+        }))
+    }
+
+    fn step_adam(&mut self, mut s: Box<AdamStage>) {
+        let side = self.stage_side(usize::from(s.stage - 1));
+        let end = (s.iteration + ADAM_SLICE).min(s.iterations);
+        while s.iteration < end {
+            let value = s.objective.value_grad(&s.x, &mut s.grad);
+            self.evaluations += 1;
+            self.work_done += 2.0 * work_weight(side);
+            if value < s.best.1 {
+                s.best = (s.x.clone(), value);
+            }
+            s.iteration += 1;
+            if !value.is_finite() {
+                // The point fails at this detail (should not happen for a point the previous
+                // stage could render): stop the stage, keeping the best so far.
+                s.iteration = s.iterations;
+                break;
+            }
+            s.adam.step(&s.domain, &mut s.x, &s.grad);
+            s.adam.scale_rates(s.decay);
+        }
+        if s.iteration < s.iterations {
+            self.phase = Phase::Adam(s);
+            return;
+        }
+        if s.best.1.is_finite()
+            && let Some(best) = self.best.as_mut()
+        {
+            best.x = s.best.0.clone();
+            best.loss = s.best.1;
+            best.stage = s.stage;
+        }
+        self.phase = if s.stage == 2 {
+            let x = self
+                .best
+                .as_ref()
+                .map_or_else(|| s.x.clone(), |b| b.x.clone());
+            self.start_adam(3, x)
+        } else {
+            Phase::Done
+        };
+        if matches!(self.phase, Phase::Done) {
+            self.work_done = self.work_total;
+        }
+    }
+
+    /// The best point so far.
+    fn current_best(&self) -> Option<Best> {
+        match &self.phase {
+            Phase::Adam(s) if s.best.1.is_finite() => Some(Best {
+                generator: self.searches[self.current].generator,
+                layout: s.objective.layout().clone(),
+                x: s.best.0.clone(),
+                loss: s.best.1,
+                stage: s.stage,
+            }),
+            Phase::Search => {
+                let search = &self.searches[self.current];
+                search.memetic.best().map(|b| Best {
+                    generator: search.generator,
+                    layout: search.objective.layout().clone(),
+                    x: b.x.clone(),
+                    loss: b.value,
+                    stage: 1,
+                })
+            }
+            _ => None,
+        }
+        .or_else(|| self.best.clone())
+    }
+
+    /// Where the fit stands (what [`Session::step`] returns).
+    pub fn progress(&self) -> Progress {
+        let (stage, iteration) = match &self.phase {
+            Phase::Search => (1, self.searches[self.current].memetic.status().generation),
+            Phase::Adam(s) => (s.stage, s.iteration),
+            Phase::Done => (3, self.stage_iterations[1]),
+        };
+        let best = self.current_best();
+        let generator = best
+            .as_ref()
+            .map_or(self.searches[self.current].generator.name(), |b| {
+                b.generator.name()
+            });
+        let (params, cameras, loss, preview) = match &best {
+            Some(b) => {
+                let cams = (0..b.layout.n_views)
+                    .map(|i| b.layout.view_vars(&b.x, i).params())
+                    .collect();
+                (
+                    b.x[..b.layout.n_gen].to_vec(),
+                    cams,
+                    b.loss,
+                    self.preview(b.generator, &b.layout, &b.x),
+                )
+            }
+            None => (Vec::new(), Vec::new(), f64::INFINITY, None),
+        };
+        Progress {
+            stage,
+            generator,
+            iteration,
+            evaluations: self.evaluations,
+            work_done: self.work_done.min(self.work_total),
+            work_total: self.work_total,
+            best_loss: loss,
+            params,
+            cameras,
+            preview,
+            done: self.is_done(),
+        }
+    }
+
+    fn preview(&self, g: &'static dyn Generator, layout: &Layout, x: &[f64]) -> Option<Mask> {
+        let small = resample_mask(&self.masks[0], PREVIEW_SIDE);
+        let view = layout.view_vars(x, 0).view(small.width(), small.height());
+        let mesh = g.generate(&x[..layout.n_gen], Lod::Low).ok()?;
+        let coverage = render_coverage(&mesh, &view).ok()?;
+        Mask::new(view.width, view.height, coverage).ok()
+    }
+
+    /// The best model and cameras so far (the final result once done). Errors only when
+    /// nothing could be evaluated.
+    pub fn result(&self) -> Result<FitResult, FitError> {
+        let Best {
+            generator: g,
+            layout,
+            x,
+            loss,
+            ..
+        } = self
+            .current_best()
+            .ok_or_else(|| FitError("nothing was evaluated yet".into()))?;
+        let mut model = Model::new(g.name(), &x[..layout.n_gen], Lod::Medium)
+            .map_err(|e| FitError(e.to_string()))?;
+        model.seed = Some(self.config.seed);
+        let (w, h) = (self.masks[0].width(), self.masks[0].height());
+        let views = (0..layout.n_views)
+            .map(|v| layout.view_vars(&x, v).view(w, h))
+            .collect();
+        Ok(FitResult {
+            model,
+            views,
+            loss,
+            evaluations: self.evaluations,
+        })
+    }
+
+    /// The fields of view used for the views.
+    pub fn fov(&self) -> &[f64] {
+        &self.fov
+    }
+}
+
+/// Tolerance of [`simplify`]: how much worse (relative) a simpler model may fit.
+const SIMPLER_TOLERANCE: f64 = 0.005;
+
+/// Occam's step between stage 1 and stage 2: every Boolean parameter that is on (a mug's
+/// handle) is switched off when that fits the views as well, within [`SIMPLER_TOLERANCE`]. A
+/// part hidden from every view costs nothing in eq. 1, so stage 1 keeps it or not at random;
+/// the evaluation — and the user — see it from all sides. Returns the evaluations spent.
+fn simplify(
+    objective: &FitObjective,
+    specs: &[crate::generators::ParamSpec],
+    x: &mut [f64],
+) -> usize {
+    let mut spent = 1;
+    let mut current = objective.value(x);
+    for (i, s) in specs.iter().enumerate() {
+        if !matches!(s.kind, crate::generators::ParamKind::Boolean) || x[i] < 0.5 {
+            continue;
+        }
+        x[i] = 0.0;
+        let off = objective.value(x);
+        spent += 1;
+        if off <= current * (1.0 + SIMPLER_TOLERANCE) {
+            current = off.min(current);
+        } else {
+            x[i] = 1.0;
+        }
+    }
+    spent
+}
+
+/// Stage-1 individuals tried at stage-2 resolution before stage 2 commits to one.
+const PROBES: usize = 4;
+
+/// Adam iterations of each probe.
+const PROBE_ITERATIONS: usize = 12;
+
+/// The hand-over from stage 1 to stage 2. At 128² and coarse detail a wrong basin (another
+/// camera elevation with a compensating shape) can score a hair better than the right one, so
+/// the best few distinct individuals are each simplified ([`simplify`]) and given a short Adam
+/// run at stage 2's resolution, in parallel; the best goes on. Returns it and the evaluations
+/// spent.
+fn probe(
+    objective: &FitObjective,
+    domain: &Domain,
+    specs: &[crate::generators::ParamSpec],
+    starts: Vec<Vec<f64>>,
+) -> (Vec<f64>, usize) {
+    use rayon::prelude::*;
+    let adam = AdamConfig {
+        iterations: PROBE_ITERATIONS,
+        lr: 0.01,
+        ..AdamConfig::default()
+    };
+    let results: Vec<(Vec<f64>, f64, usize)> = starts
+        .into_par_iter()
+        .map(|mut x| {
+            let spent = simplify(objective, specs, &mut x);
+            let (ind, evals) = crate::optim::adam_search(objective, domain, &x, &adam);
+            (ind.x, ind.value, spent + evals)
+        })
+        .collect();
+    let spent = results.iter().map(|r| r.2).sum();
+    let best = results
+        .into_iter()
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|r| r.0)
+        .unwrap_or_default();
+    (best, spent)
+}
+
+/// Camera pitch candidates (radians; positive looks down on the object).
+const PITCHES: [f64; 3] = [0.15, 0.45, 0.8];
+
+/// The layout, the domain and the seed points of a generator's stage 1: each of the
+/// generator's seeds × each camera candidate, with scale and translation solved per view from
+/// the mask's bounding box.
+fn start_points(
+    g: &'static dyn Generator,
+    stats: &[MaskStats],
+    fov: &[f64],
+    fit_fov: bool,
+) -> Result<(Layout, Domain, Vec<Vec<f64>>), FitError> {
+    let layout = Layout {
+        n_gen: g.params().len(),
+        n_views: stats.len(),
+        fit_fov,
+        fov_y: fov.to_vec(),
+    };
+    let mut seeds = Vec::new();
+    let (mut ls_lo, mut ls_hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for seed in g.seeds() {
+        let Ok(mesh) = g.generate(&seed, Lod::Low) else {
+            continue;
+        };
+        for yaw_flip in [false, true] {
+            for &pitch in &PITCHES {
+                let mut x = seed.clone();
+                x.resize(layout.len(), 0.0);
+                let mut ok = true;
+                for (v, st) in stats.iter().enumerate() {
+                    let yaw = st.handle_yaw() + if yaw_flip { std::f64::consts::PI } else { 0.0 };
+                    let yaw = if yaw > std::f64::consts::PI {
+                        yaw - std::f64::consts::TAU
+                    } else {
+                        yaw
+                    };
+                    match fit_box(&mesh.positions, st, yaw, pitch, fov[v]) {
+                        Some(vars) => {
+                            ls_lo = ls_lo.min(vars.log_scale);
+                            ls_hi = ls_hi.max(vars.log_scale);
+                            layout.set_view_vars(&mut x, v, &vars);
+                        }
+                        None => ok = false,
+                    }
+                }
+                if ok {
+                    seeds.push(x);
+                }
+            }
+        }
+    }
+    if seeds.is_empty() {
+        return Err(FitError(format!(
+            "no seed of generator `{}` can be placed in the views",
+            g.name()
+        )));
+    }
+    let mut vars: Vec<Var> = Domain::from_specs(g.params())
+        .map_err(|e| FitError(e.to_string()))?
+        .vars()
+        .to_vec();
+    for (v, st) in stats.iter().enumerate() {
+        let aspect = f64::from(st.width) / f64::from(st.height);
+        vars.extend(view_domain(ls_lo, ls_hi, fov[v], fit_fov, aspect));
+    }
+    let domain = Domain::new(vars).map_err(|e| FitError(e.to_string()))?;
+    Ok((layout, domain, seeds))
+}

@@ -1,0 +1,174 @@
+//! The fit step's edge: a [`FitSession`] is an opaque handle around the core's resumable
+//! reconstruction `Session`. The worker calls [`FitSession::step`] in slices and yields to its
+//! message loop between them, so the page stays responsive and a cancel arrives promptly;
+//! cancelling is simply not stepping any more.
+
+use crate::mask::Mask;
+use crate::reconstruct::{FitConfig, Session, export_camera};
+use wasm_bindgen::prelude::*;
+
+fn js(e: impl std::fmt::Display) -> JsError {
+    JsError::new(&e.to_string())
+}
+
+/// A fit in progress.
+#[wasm_bindgen]
+pub struct FitSession {
+    session: Session,
+    /// The last progress's silhouette preview (view 0), as 0..255 coverage.
+    preview: Option<(u32, u32, Vec<u8>)>,
+}
+
+/// One step's news for the page (the preview is fetched separately, as bytes).
+#[derive(serde::Serialize)]
+struct StepOut {
+    stage: u8,
+    generator: &'static str,
+    iteration: usize,
+    evaluations: usize,
+    work_done: f64,
+    work_total: f64,
+    /// `null` before anything was evaluated.
+    best_loss: Option<f64>,
+    params: Vec<f64>,
+    done: bool,
+}
+
+/// The fitted model and its cameras.
+#[derive(serde::Serialize)]
+struct ResultOut {
+    generator: &'static str,
+    params: Vec<f64>,
+    lod: u8,
+    seed: Option<u64>,
+    loss: f64,
+    evaluations: usize,
+    /// One camera per photo, [`super::CAMERA_FLOATS`] numbers each, for `generateGlb`.
+    cameras: Vec<f32>,
+}
+
+/// Masks from 8-bit codes (object 255, background 0, don't care 128, anything else a soft
+/// coverage), `widths[i] × heights[i]` each, concatenated.
+fn masks_of(widths: &[u32], heights: &[u32], codes: &[u8]) -> Result<Vec<Mask>, JsError> {
+    if widths.len() != heights.len() {
+        return Err(JsError::new("one width and one height per mask"));
+    }
+    let mut masks = Vec::with_capacity(widths.len());
+    let mut at = 0usize;
+    for (&w, &h) in widths.iter().zip(heights) {
+        let n = w as usize * h as usize;
+        let Some(slice) = codes.get(at..at + n) else {
+            return Err(JsError::new(
+                "the mask bytes are shorter than the sizes say",
+            ));
+        };
+        let values = slice
+            .iter()
+            .map(|&c| {
+                if c == 128 {
+                    Mask::DONT_CARE
+                } else {
+                    f32::from(c) / 255.0
+                }
+            })
+            .collect();
+        masks.push(Mask::new(w, h, values).map_err(js)?);
+        at += n;
+    }
+    if at != codes.len() {
+        return Err(JsError::new("the mask bytes are longer than the sizes say"));
+    }
+    Ok(masks)
+}
+
+#[wasm_bindgen]
+impl FitSession {
+    /// Starts a fit of `generator` (or `auto`) to the masks (see `masks_of`); nothing is
+    /// evaluated yet. `quality` scales every stage's budget (1 = default).
+    #[wasm_bindgen(constructor)]
+    pub fn new(
+        generator: &str,
+        seed: u32,
+        quality: f64,
+        widths: &[u32],
+        heights: &[u32],
+        codes: &[u8],
+    ) -> Result<FitSession, JsError> {
+        if !(quality.is_finite() && quality > 0.0 && quality <= 16.0) {
+            return Err(JsError::new("quality must be in (0, 16]"));
+        }
+        let config = FitConfig {
+            generator: generator.to_string(),
+            seed: u64::from(seed),
+            quality,
+            ..FitConfig::default()
+        };
+        let masks = masks_of(widths, heights, codes)?;
+        let session = Session::new(config, masks).map_err(js)?;
+        Ok(FitSession {
+            session,
+            preview: None,
+        })
+    }
+
+    /// One bounded slice of work; returns where the fit stands.
+    pub fn step(&mut self) -> Result<JsValue, JsError> {
+        let p = self.session.step();
+        self.preview = p
+            .preview
+            .as_ref()
+            .map(|m| (m.width(), m.height(), m.to_luma8()));
+        let out = StepOut {
+            stage: p.stage,
+            generator: p.generator,
+            iteration: p.iteration,
+            evaluations: p.evaluations,
+            work_done: p.work_done,
+            work_total: p.work_total,
+            best_loss: p.best_loss.is_finite().then_some(p.best_loss),
+            params: p.params,
+            done: p.done,
+        };
+        serde_wasm_bindgen::to_value(&out).map_err(js)
+    }
+
+    /// Width of the last preview (0 when there is none).
+    #[wasm_bindgen(js_name = previewWidth)]
+    pub fn preview_width(&self) -> u32 {
+        self.preview.as_ref().map_or(0, |p| p.0)
+    }
+
+    /// Height of the last preview (0 when there is none).
+    #[wasm_bindgen(js_name = previewHeight)]
+    pub fn preview_height(&self) -> u32 {
+        self.preview.as_ref().map_or(0, |p| p.1)
+    }
+
+    /// The last preview silhouette of view 0 as 0..255 coverage, row-major (empty when none).
+    #[wasm_bindgen(js_name = previewCoverage)]
+    pub fn preview_coverage(&self) -> Vec<u8> {
+        self.preview.as_ref().map_or_else(Vec::new, |p| p.2.clone())
+    }
+
+    /// The best model so far (the result once done).
+    pub fn result(&self) -> Result<JsValue, JsError> {
+        let r = self.session.result().map_err(js)?;
+        let mut cameras = Vec::with_capacity(r.views.len() * super::CAMERA_FLOATS);
+        for v in &r.views {
+            let c = export_camera(v, None);
+            cameras.push(c.yfov);
+            cameras.push(c.aspect);
+            cameras.extend_from_slice(&c.camera_to_world);
+        }
+        let out = ResultOut {
+            generator: r.model.generator.name(),
+            params: r.model.params.clone(),
+            lod: r.model.lod as u8,
+            seed: r.model.seed,
+            loss: r.loss,
+            evaluations: r.evaluations,
+            cameras,
+        };
+        serde_wasm_bindgen::to_value(&out).map_err(js)
+    }
+}

@@ -1,0 +1,98 @@
+//! The mask step's edge: one [`MaskSession`] per photo, an opaque handle around the core's
+//! GrabCut session (`segment::Session`). Photos come in as upright RGBA pixels from a browser
+//! canvas; masks go out as 8-bit codes (object 255, background 0, don't care 128 — the same
+//! as [`Mask::to_luma8`](crate::mask::Mask::to_luma8)), in working-image pixels.
+
+use crate::segment::{BBox, Label, Options, Photo, Session, Stroke, WORKING_SIDE};
+use wasm_bindgen::prelude::*;
+
+fn js(e: impl std::fmt::Display) -> JsError {
+    JsError::new(&e.to_string())
+}
+
+/// A photo's segmentation, kept for corrections.
+#[wasm_bindgen]
+pub struct MaskSession {
+    photo: Photo,
+    session: Session,
+}
+
+/// What the page shows next to a mask.
+#[derive(serde::Serialize)]
+struct MaskInfo {
+    width: u32,
+    height: u32,
+    /// `[x0, y0, x1, y1]` in working pixels (end exclusive), or `None` when nothing was found.
+    bbox: Option<[u32; 4]>,
+    confidence: f32,
+    low_confidence: bool,
+    warnings: Vec<String>,
+}
+
+#[wasm_bindgen]
+impl MaskSession {
+    /// Segments a `width`×`height` RGBA photo automatically (downscaled to the working size
+    /// first). Errors are messages for the user (too small, bad length, nothing found…).
+    #[wasm_bindgen(constructor)]
+    pub fn new(width: u32, height: u32, rgba: &[u8]) -> Result<MaskSession, JsError> {
+        let photo = Photo::from_rgba(width, height, rgba, WORKING_SIDE).map_err(js)?;
+        let session = Session::automatic(&photo, &Options::default()).map_err(js)?;
+        Ok(MaskSession { photo, session })
+    }
+
+    /// Starts over from a rectangle around the object (GrabCut proper: outside is background),
+    /// in working pixels, end exclusive.
+    #[wasm_bindgen(js_name = setRect)]
+    pub fn set_rect(&mut self, x0: u32, y0: u32, x1: u32, y1: u32) -> Result<(), JsError> {
+        let rect = BBox { x0, y0, x1, y1 };
+        self.session = Session::with_rect(&self.photo, rect, &Options::default()).map_err(js)?;
+        Ok(())
+    }
+
+    /// Paints an object (`object = true`) or background stroke along the polyline `points`
+    /// (`[x0, y0, x1, y1, …]` in working pixels) and cuts again.
+    #[wasm_bindgen(js_name = addStroke)]
+    pub fn add_stroke(&mut self, object: bool, points: &[f32], radius: f32) -> Result<(), JsError> {
+        if points.is_empty()
+            || !points.len().is_multiple_of(2)
+            || !points.iter().all(|v| v.is_finite())
+        {
+            return Err(JsError::new("a stroke needs finite x, y pairs"));
+        }
+        if !(radius.is_finite() && radius > 0.0) {
+            return Err(JsError::new("a stroke needs a positive radius"));
+        }
+        let stroke = Stroke {
+            label: if object {
+                Label::Object
+            } else {
+                Label::Background
+            },
+            points: points.chunks_exact(2).map(|p| [p[0], p[1]]).collect(),
+            radius,
+        };
+        self.session.add_stroke(&stroke).map_err(js)?;
+        self.session.recut().map_err(js)?;
+        Ok(())
+    }
+
+    /// The mask for the fit: object 255, background 0, don't care 128 (a band along the
+    /// outline), row-major in working pixels.
+    pub fn codes(&self) -> Vec<u8> {
+        self.session.segmentation().mask.to_luma8()
+    }
+
+    /// `{ width, height, bbox, confidence, low_confidence, warnings }`.
+    pub fn info(&self) -> Result<JsValue, JsError> {
+        let s = self.session.segmentation();
+        let info = MaskInfo {
+            width: s.mask.width(),
+            height: s.mask.height(),
+            bbox: s.bbox.map(|b| [b.x0, b.y0, b.x1, b.y1]),
+            confidence: s.confidence,
+            low_confidence: s.is_low_confidence(),
+            warnings: s.warnings.clone(),
+        };
+        serde_wasm_bindgen::to_value(&info).map_err(js)
+    }
+}

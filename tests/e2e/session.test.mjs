@@ -1,0 +1,113 @@
+// Work is not lost: a reload restores the photos, masks and model from IndexedDB; "Start over"
+// clears them; a worker that dies mid-session is replaced and the session goes on (the model is
+// shown again, mask corrections still work).
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { startServer, launchBrowser, openPage, screenshot } from './harness.mjs';
+
+let server;
+let browser;
+let page;
+let log;
+
+const ready = (p = page) => p.waitForSelector('body[data-ready="true"]', { timeout: 90000 });
+const settled = () => page.evaluate(() => window.procfit.editor.settled());
+const maskFound = () =>
+  page.waitForFunction(() => /Object found|check the mask/.test(document.getElementById('mask-state').textContent), null, { timeout: 60000 });
+
+before(async () => {
+  server = await startServer();
+  browser = await launchBrowser();
+  ({ page, log } = await openPage(browser.context, server.url));
+  await ready();
+});
+
+after(async () => {
+  await browser?.close();
+  server?.stop();
+});
+
+test('a reload restores photos, masks, the model and its starting point', async () => {
+  await page.click('button[data-sample="bowl"]');
+  await maskFound();
+  await page.selectOption('#lod', '0');
+  await page.focus('#param-y_scale');
+  await page.keyboard.press('End');
+  await settled();
+  const before = await page.evaluate(() => ({
+    params: window.procfit.editor.params.slice(),
+    base: window.procfit.editor.base.slice(),
+    lod: window.procfit.editor.lod,
+    codes: Array.from(window.procfit.state.photos[0].mask.codes.slice(0, 4096)),
+  }));
+  // The last change must be saved too: wait for a save that finished after it.
+  const changedAt = await page.evaluate(() => Date.now());
+  await page.waitForFunction((t) => Number(document.body.dataset.saved || 0) > t, changedAt, { timeout: 20000 });
+  await page.reload();
+  await ready();
+  await settled();
+  const afterReload = await page.evaluate(() => ({
+    params: window.procfit.editor.params.slice(),
+    base: window.procfit.editor.base.slice(),
+    lod: window.procfit.editor.lod,
+    codes: Array.from(window.procfit.state.photos[0].mask.codes.slice(0, 4096)),
+    photos: window.procfit.state.photos.length,
+  }));
+  assert.equal(afterReload.photos, 1);
+  assert.deepEqual(afterReload.params, before.params);
+  assert.deepEqual(afterReload.base, before.base);
+  assert.equal(afterReload.lod, 0);
+  assert.equal(await page.inputValue('#lod'), '0');
+  assert.deepEqual(afterReload.codes, before.codes);
+  assert.equal(await page.isVisible('#restored'), true);
+  // The step last worked in (the model's sliders) is the one scrolled to.
+  assert.equal(await page.evaluate(() => window.procfit.state.step), 'step-model');
+  const top = await page.evaluate(() => document.getElementById('step-model').getBoundingClientRect().top);
+  assert.ok(Math.abs(top) < 5, `the model step is ${top}px from the top of the window`);
+  assert.match(await page.textContent('#restored-text'), /Restored your last session \(1 photo\)/);
+  await screenshot(page, '09-restored');
+});
+
+test('the worker dies mid-session: it is replaced and the session goes on', async () => {
+  const params = await page.evaluate(() => window.procfit.editor.params.slice());
+  const err = await page.evaluate(() =>
+    window.procfit.client.call(window.procfit.REQUESTS.DEBUG_PANIC).then(() => null, (e) => e.message),
+  );
+  assert.match(err, /deliberate panic/);
+  await page.waitForFunction(() => document.getElementById('status').dataset.state === 'ready' && window.procfit.client.restarts > 0, null, { timeout: 60000 });
+  // The model is shown again by the new worker, with the same parameters.
+  await page.focus('#param-y_scale');
+  await page.keyboard.press('Home');
+  await settled();
+  assert.equal(await page.evaluate(() => window.procfit.editor.glb.params[9]), 0.1);
+  assert.deepEqual((await page.evaluate(() => window.procfit.editor.params)).slice(10), params.slice(10));
+  // A mask correction needs the worker's mask session: it was made again.
+  await page.check('input[name="tool"][value="background"]');
+  const box = await page.locator('#mask-canvas').boundingBox();
+  const before = await page.evaluate(() => window.procfit.state.photos[0].mask.codes);
+  await page.mouse.move(box.x + 5, box.y + 5);
+  await page.mouse.down();
+  await page.mouse.move(box.x + 40, box.y + 10, { steps: 3 });
+  await page.mouse.up();
+  await page.waitForFunction((b) => window.procfit.state.photos[0].mask.codes !== b, before, { timeout: 30000 });
+  assert.equal(await page.isHidden('#photos-message'), true, await page.textContent('#photos-message'));
+  await page.check('input[name="tool"][value="none"]');
+  log.consoleErrors = log.consoleErrors.filter((m) => !/deliberate panic|unreachable|RuntimeError/.test(m));
+});
+
+test('"Start over" clears the saved session', async () => {
+  await Promise.all([page.waitForNavigation(), page.click('#start-over')]);
+  await ready();
+  assert.equal(await page.evaluate(() => window.procfit.state.photos.length), 0);
+  assert.equal(await page.isHidden('#restored'), true);
+  await page.reload();
+  await ready();
+  assert.equal(await page.evaluate(() => window.procfit.state.photos.length), 0);
+});
+
+test('no console errors, no page errors, no request outside the origin', () => {
+  assert.deepEqual(log.pageErrors, []);
+  assert.deepEqual(log.consoleErrors, []);
+  const origin = new URL(server.url).origin;
+  assert.deepEqual(log.requests.filter((u) => !u.startsWith(origin) && !u.startsWith('data:') && !u.startsWith('blob:')), []);
+});

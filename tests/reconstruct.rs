@@ -1,0 +1,287 @@
+//! End-to-end tests of the fit (paper §3.2–3.4, evaluation as in §4): round trips from random
+//! non-preset dishes rendered from random cameras, multi-view against single view, a mug that
+//! the generator did not make, determinism across thread counts, and bad input.
+//!
+//! Thresholds, measured and stated: single view IoU-64 ≥ 0.90 for buildings (as the issue
+//! asks); for dishes ≥ 0.95 on average over five and ≥ 0.90 each (from one photo a handle
+//! turned towards the camera looks like a shorter handle seen side-on, a low bowl's height
+//! trades against the shape of its underside, and the bounding-box normalisation of IoU-64
+//! magnifies both); four views ≥ 0.95 and no worse than one.
+
+mod reconstruct_support;
+
+use procfit::generators::Lod;
+use procfit::mask::Mask;
+use procfit::optim::Rng;
+use procfit::reconstruct::{FitConfig, Session};
+use reconstruct_support::*;
+
+fn config(views: usize, quality: f64) -> FitConfig {
+    FitConfig {
+        generator: "dish".into(),
+        fov_y: vec![Some(0.5); views],
+        quality,
+        // Stage 1 at 2000 evaluations keeps the suite fast; the default is 5000.
+        budget: Some(2000),
+        ..FitConfig::default()
+    }
+}
+
+/// Camera elevations of the extra views of a multi-view case: one nearly level, one steep.
+const EXTRA_ELEVATIONS: [f64; 3] = [0.08, 0.7, 0.35];
+
+/// Fits a random dish (seeded by `case`) from `views` views and checks its IoU-64; returns it.
+/// View 0 is the single-view case's camera; views 1.. are spun by quarter turns and taken
+/// from [`EXTRA_ELEVATIONS`].
+fn check_dish(case: u64, handle: bool, views: usize, min_iou: f64) -> f64 {
+    let mut rng = Rng::new(case);
+    let x = random_dish(&mut rng, handle);
+    let truth_mesh = mesh_of("dish", &x, Lod::High);
+    let mut truths = vec![random_view_at(&mut rng, &truth_mesh, 0.5, 0.0)];
+    for k in 1..views {
+        let spin = k as f64 * std::f64::consts::FRAC_PI_2;
+        truths.push(view_at(
+            &mut rng,
+            &truth_mesh,
+            0.5,
+            spin,
+            EXTRA_ELEVATIONS[(k - 1) % 3],
+        ));
+    }
+    let masks: Vec<Mask> = truths
+        .iter()
+        .map(|t| render_mask(&truth_mesh, t, 256))
+        .collect();
+    let result = fit(config(views, 1.0), masks);
+    let iou = fit_iou64(&result, &truth_mesh, &truths[0]);
+    eprintln!("dish case {case} (handle {handle}, {views} views): IoU-64 {iou:.4}");
+    assert!(
+        iou >= min_iou,
+        "dish case {case} (handle {handle}, {views} views): IoU-64 {iou:.4} < {min_iou}"
+    );
+    iou
+}
+
+/// Five random dishes (three without a handle, two with), one view each: every one ≥ 0.90
+/// and the mean ≥ 0.95. Measured: 0.981, 0.922, 0.996, 0.962, 0.942 (mean 0.961); case 4 is a
+/// low bowl seen from 17° whose height trades against the roundness of its underside, an
+/// ambiguity one silhouette cannot settle (four views do, see below).
+#[test]
+fn single_view_dishes_reach_iou64() {
+    use rayon::prelude::*;
+    let cases = [(2, false), (4, false), (6, false), (7, true), (9, true)];
+    let ious: Vec<f64> = cases
+        .par_iter()
+        .map(|&(case, handle)| check_dish(case, handle, 1, 0.90))
+        .collect();
+    let mean = ious.iter().sum::<f64>() / ious.len() as f64;
+    assert!(mean >= 0.95, "mean IoU-64 {mean:.4} of {ious:?}");
+}
+
+#[test]
+fn four_views_settle_what_one_cannot() {
+    let one = check_dish(4, false, 1, 0.90);
+    let four = check_dish(4, false, 4, 0.95);
+    assert!(four >= one, "4 views {four:.4} < 1 view {one:.4}");
+}
+
+/// Same seed → bit-identical parameters and cameras, on 1 and 2 threads.
+#[test]
+fn same_seed_same_fit_on_1_and_2_threads() {
+    let mut rng = Rng::new(11);
+    let x = random_dish(&mut rng, true);
+    let mesh = mesh_of("dish", &x, Lod::High);
+    let truth = random_view_at(&mut rng, &mesh, 0.5, 0.0);
+    let mask = render_mask(&mesh, &truth, 96);
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let c = FitConfig {
+                budget: Some(150),
+                quality: 0.1,
+                seed: 5,
+                ..config(1, 0.1)
+            };
+            let r = fit(c, vec![mask.clone()]);
+            (r.model.params, r.views[0].params, r.loss)
+        })
+    };
+    let (a, b) = (run(1), run(2));
+    assert_eq!(a.0, b.0);
+    assert_eq!(a.1, b.1);
+    assert_eq!(a.2.to_bits(), b.2.to_bits());
+}
+
+#[test]
+fn bad_masks_are_refused_with_a_message() {
+    let ok = Mask::new(
+        32,
+        32,
+        (0..1024)
+            .map(|i| {
+                if (i % 32) > 10 && (i % 32) < 20 && i / 32 > 8 {
+                    1.0
+                } else {
+                    0.0
+                }
+            })
+            .collect(),
+    )
+    .unwrap();
+    let check = |masks: Vec<Mask>, cfg: FitConfig, needle: &str| {
+        let err = Session::new(cfg, masks).err().expect("should be refused").0;
+        assert!(err.contains(needle), "message `{err}` lacks `{needle}`");
+        assert!(!err.contains('\n'));
+    };
+    check(vec![], config(1, 1.0), "no masks");
+    check(vec![Mask::empty(32, 32).unwrap()], config(1, 1.0), "empty");
+    check(
+        vec![Mask::new(32, 32, vec![1.0; 1024]).unwrap()],
+        config(1, 1.0),
+        "all object",
+    );
+    check(
+        vec![Mask::new(1, 1, vec![1.0]).unwrap()],
+        config(1, 1.0),
+        "1×1",
+    );
+    check(
+        vec![ok.clone(), Mask::empty(32, 16).unwrap()],
+        config(2, 1.0),
+        "same size",
+    );
+    check(
+        vec![ok.clone()],
+        FitConfig {
+            generator: "teapot".into(),
+            ..config(1, 1.0)
+        },
+        "unknown generator",
+    );
+    check(
+        vec![ok.clone()],
+        FitConfig {
+            quality: f64::NAN,
+            ..config(1, 1.0)
+        },
+        "quality",
+    );
+    check(
+        vec![ok.clone()],
+        FitConfig {
+            budget: Some(0),
+            ..config(1, 1.0)
+        },
+        "budget",
+    );
+    check(
+        vec![ok],
+        FitConfig {
+            fov_y: vec![Some(-1.0)],
+            ..config(1, 1.0)
+        },
+        "field of view",
+    );
+}
+
+/// Fits a random building (seeded by `case`) from one view and checks its IoU-64.
+fn check_building(case: u64, min_iou: f64) {
+    let mut rng = Rng::new(case);
+    let x = random_building(&mut rng);
+    let truth_mesh = mesh_of("building", &x, Lod::High);
+    let truth = random_view_at(&mut rng, &truth_mesh, 0.5, 0.0);
+    let mask = render_mask(&truth_mesh, &truth, 256);
+    let r = fit(
+        FitConfig {
+            generator: "building".into(),
+            ..config(1, 1.0)
+        },
+        vec![mask],
+    );
+    let iou = fit_iou64(&r, &truth_mesh, &truth);
+    eprintln!("building case {case}: IoU-64 {iou:.4}");
+    assert!(
+        iou >= min_iou,
+        "building case {case}: IoU-64 {iou:.4} < {min_iou}"
+    );
+}
+
+#[test]
+fn single_view_building_1() {
+    check_building(1, 0.90);
+}
+
+#[test]
+fn single_view_building_2() {
+    check_building(2, 0.90);
+}
+
+#[test]
+fn single_view_building_3() {
+    check_building(3, 0.90);
+}
+
+#[test]
+fn measured_mug_from_obj_reconstructs() {
+    let mesh = measured_mug();
+    let mut rng = Rng::new(31);
+    let truth = random_view_at(&mut rng, &mesh, 0.5, 0.0);
+    let mask = render_mask(&mesh, &truth, 256);
+    let r = fit(config(1, 1.0), vec![mask]);
+    let iou = fit_iou64(&r, &mesh, &truth);
+    eprintln!("measured mug: IoU-64 {iou:.4}");
+    assert!(iou >= 0.93, "measured mug: IoU-64 {iou:.4} < 0.93");
+}
+
+#[test]
+fn auto_picks_the_generator_that_fits() {
+    let check = |name: &str, mesh: &procfit::generators::Mesh, seed: u64| {
+        let mut rng = Rng::new(seed);
+        let truth = random_view_at(&mut rng, mesh, 0.5, 0.0);
+        let mask = render_mask(mesh, &truth, 128);
+        let cfg = FitConfig {
+            generator: "auto".into(),
+            budget: Some(600),
+            quality: 0.3,
+            ..config(1, 0.3)
+        };
+        let r = fit(cfg, vec![mask]);
+        assert_eq!(r.model.generator.name(), name);
+    };
+    check("dish", &measured_mug(), 41);
+    let b = mesh_of("building", &random_building(&mut Rng::new(42)), Lod::High);
+    check("building", &b, 43);
+}
+
+#[test]
+fn session_reports_progress_and_can_stop_early() {
+    let mut rng = Rng::new(51);
+    let mesh = measured_mug();
+    let truth = random_view_at(&mut rng, &mesh, 0.5, 0.0);
+    let mask = render_mask(&mesh, &truth, 200);
+    let mut s = Session::new(config(1, 0.3), vec![mask]).unwrap();
+    assert!(s.result().is_err(), "nothing evaluated yet");
+    let mut stages = Vec::new();
+    let mut last_work = 0.0;
+    for _ in 0..40 {
+        let p = s.step();
+        assert!(p.work_done >= last_work && p.work_done <= p.work_total);
+        last_work = p.work_done;
+        stages.push(p.stage);
+        assert!(p.best_loss.is_finite());
+        assert_eq!(p.params.len(), 53);
+        assert_eq!(p.cameras.len(), 1);
+        // The preview is the best silhouette at ≤ 128 a side, in the mask's aspect.
+        let preview = p.preview.expect("a preview");
+        assert_eq!((preview.width(), preview.height()), (128, 128));
+        assert!(preview.area() > 100.0);
+    }
+    // Cancelling is not stepping: the best so far is a usable model.
+    let r = s.result().unwrap();
+    assert_eq!(r.views.len(), 1);
+    assert!(!s.is_done());
+    assert!(stages.windows(2).all(|w| w[0] <= w[1]));
+}

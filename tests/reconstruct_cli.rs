@@ -1,0 +1,198 @@
+//! The `reconstruct`, `render` and `eval` subcommands as a user runs them: `--help`, a
+//! render → reconstruct → eval round trip, and bad input ending in one line on stderr with a
+//! non-zero exit code.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn procfit(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_procfit"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("procfit-recon-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+fn write_png(path: &Path, w: u32, h: u32, f: impl Fn(u32, u32) -> u8) {
+    image::GrayImage::from_fn(w, h, |x, y| image::Luma([f(x, y)]))
+        .save(path)
+        .unwrap();
+}
+
+#[test]
+fn every_subcommand_has_help() {
+    for sub in ["reconstruct", "render", "eval"] {
+        let out = procfit(&[sub, "--help"]);
+        assert!(out.status.success(), "{sub} --help failed");
+        assert!(String::from_utf8_lossy(&out.stdout).contains("Usage"));
+    }
+}
+
+#[test]
+fn render_reconstruct_eval_round_trip() {
+    let cam = scratch("cam.json");
+    std::fs::write(
+        &cam,
+        r#"{"yaw": 0.3, "pitch": 0.4, "ty": -0.3, "fov_y": 0.5}"#,
+    )
+    .unwrap();
+    let mask = scratch("mug.png");
+    let out = procfit(&[
+        "render",
+        "--generator",
+        "dish",
+        "--preset",
+        "mug",
+        "--camera",
+        s(&cam),
+        "--size",
+        "160",
+        "-o",
+        s(&mask),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (glb, params) = (scratch("fit.glb"), scratch("fit.json"));
+    let out = procfit(&[
+        "reconstruct",
+        "--generator",
+        "dish",
+        "--fov",
+        "0.5",
+        "--budget",
+        "600",
+        "--quality",
+        "0.5",
+        s(&mask),
+        "-o",
+        s(&glb),
+        "--params-out",
+        s(&params),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("stage 3/3") && err.contains("ETA"),
+        "progress: {err}"
+    );
+    let doc = procfit::model::Model::from_json(&std::fs::read_to_string(&params).unwrap()).unwrap();
+    assert_eq!(doc.generator.name(), "dish");
+    let reference = scratch("ref.glb");
+    assert!(
+        procfit(&[
+            "generate",
+            "--generator",
+            "dish",
+            "--preset",
+            "mug",
+            "-o",
+            s(&reference)
+        ])
+        .status
+        .success()
+    );
+    let out = procfit(&[
+        "eval",
+        "--reference",
+        s(&reference),
+        s(&glb),
+        "--mask",
+        s(&mask),
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let value = |key: &str| -> f64 {
+        let line = text.lines().find(|l| l.starts_with(key)).unwrap();
+        line[key.len()..]
+            .split_whitespace()
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap()
+    };
+    // The GLB's camera must re-project the model onto the input mask.
+    assert!(value("input-view IoU:") > 0.95, "{text}");
+    assert!(value("IoU-64:") > 0.9, "{text}");
+}
+
+#[test]
+fn bad_input_gives_one_line_and_failure() {
+    let check = |args: &[&str], needle: &str| {
+        let out = procfit(args);
+        let err = String::from_utf8_lossy(&out.stderr).to_string();
+        assert!(!out.status.success(), "{args:?} should fail");
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+        assert!(err.contains(needle), "{args:?}: `{err}` lacks `{needle}`");
+    };
+    let empty = scratch("empty.png");
+    write_png(&empty, 64, 64, |_, _| 0);
+    let full = scratch("full.png");
+    write_png(&full, 64, 64, |_, _| 255);
+    let tiny = scratch("tiny.png");
+    write_png(&tiny, 1, 1, |_, _| 255);
+    let blob = |w: u32, h: u32| {
+        move |x: u32, y: u32| {
+            if x > w / 4 && x < w / 2 && y > h / 4 && y < 3 * h / 4 {
+                255
+            } else {
+                0
+            }
+        }
+    };
+    let a = scratch("a.png");
+    write_png(&a, 64, 64, blob(64, 64));
+    let b = scratch("b.png");
+    write_png(&b, 64, 48, blob(64, 48));
+    let text = scratch("not-an-image.png");
+    std::fs::write(&text, "hello").unwrap();
+    let out = scratch("out.glb");
+    let recon = |img: &[&str], needle: &str| {
+        let mut args = vec!["reconstruct", "--generator", "dish"];
+        args.extend_from_slice(img);
+        args.extend_from_slice(&["-o", s(&out)]);
+        check(&args, needle);
+    };
+    recon(&[s(&empty)], "empty");
+    recon(&[s(&full)], "all object");
+    recon(&[s(&tiny)], "1×1");
+    recon(&[s(&text)], "not a readable image");
+    recon(&[s(&a), s(&b)], "same size");
+    recon(&["/nonexistent/photo.jpg"], "cannot read");
+    check(
+        &["reconstruct", "--generator", "teapot", s(&a), "-o", s(&out)],
+        "unknown generator",
+    );
+    check(
+        &[
+            "render",
+            "--generator",
+            "dish",
+            "--preset",
+            "mug",
+            "--camera",
+            s(&text),
+            "--size",
+            "0",
+            "-o",
+            s(&out),
+        ],
+        "camera JSON",
+    );
+    check(&["eval", "--reference", s(&text), s(&out)], "");
+}

@@ -1,0 +1,150 @@
+//! The fit's objective against central finite differences: the camera values (through the
+//! elevation/spin → renderer-angle conversion and the log-scale) and a few generator
+//! parameters, on a small scene, plus the conventions of the camera helpers.
+
+mod reconstruct_support;
+
+use procfit::generators::Lod;
+use procfit::optim::{Objective, Rng};
+use procfit::reconstruct::views::{ViewVars, fov_from_focal_35mm, mask_stats, renderer_angles};
+use procfit::reconstruct::{FitObjective, Layout};
+use reconstruct_support::*;
+
+#[test]
+fn objective_gradient_matches_finite_differences() {
+    let mut rng = Rng::new(21);
+    let x = random_dish(&mut rng, true);
+    let mesh = mesh_of("dish", &x, Lod::Medium);
+    let truth = random_view_at(&mut rng, &mesh, 0.5, 0.0);
+    // 384²: coarser images make the finite differences of 8-bit anti-aliased coverage noisy.
+    let mask = render_mask(&mesh, &truth, 384);
+    let layout = Layout {
+        n_gen: x.len(),
+        n_views: 1,
+        fit_fov: true,
+        fov_y: vec![0.5],
+    };
+    let obj = FitObjective::new(
+        generator("dish"),
+        Lod::Medium,
+        layout.clone(),
+        vec![mask],
+        1e-3,
+        false,
+    );
+    // A point near, not at, the truth: a visible residual on every edge.
+    let mut p = x.clone();
+    p[0] += 0.3;
+    p[9] *= 0.93;
+    p.resize(layout.len(), 0.0);
+    let vars = ViewVars {
+        yaw: 0.35,
+        pitch: 0.42,
+        roll: 0.04,
+        tx: truth.translation.x + 0.02,
+        ty: truth.translation.y - 0.03,
+        log_scale: truth.scale.ln() + 0.05,
+        fov_y: 0.52,
+    };
+    layout.set_view_vars(&mut p, 0, &vars);
+    let mut g = vec![0.0; p.len()];
+    obj.value_grad(&p, &mut g);
+    let o = layout.view_offset(0);
+    // (index, step): camera values, then profile radii, y scale, handle thickness, centre and
+    // a sweep radius. Measured agreement is 1–10 % (roll 25 % of a small value), limited by
+    // the finite differences of quantised coverage, hence 15 % + 2e-3.
+    let checks: Vec<(usize, f64)> = (0..7)
+        .map(|k| (o + k, 1e-3))
+        .chain([
+            (0, 1e-2),
+            (4, 1e-2),
+            (8, 1e-2),
+            (9, 1e-2),
+            (11, 1e-3),
+            (12, 1e-2),
+            (20, 1e-2),
+        ])
+        .collect();
+    for (i, h) in checks {
+        let (mut a, mut b) = (p.clone(), p.clone());
+        a[i] += h;
+        b[i] -= h;
+        let fd = (obj.value(&a) - obj.value(&b)) / (2.0 * h);
+        let err = (g[i] - fd).abs();
+        assert!(
+            err <= 0.15 * fd.abs().max(g[i].abs()) + 2e-3,
+            "d/dx[{i}]: analytic {} vs finite difference {fd}",
+            g[i]
+        );
+    }
+}
+
+#[test]
+fn renderer_angles_reproduce_elevation_and_spin() {
+    use glam::DMat3;
+    let check = |yaw: f64, pitch: f64, roll: f64| {
+        let want = DMat3::from_rotation_z(roll)
+            * DMat3::from_rotation_x(pitch)
+            * DMat3::from_rotation_y(yaw);
+        let [a, b, c] = renderer_angles(yaw, pitch, roll);
+        let got = DMat3::from_rotation_y(a) * DMat3::from_rotation_x(b) * DMat3::from_rotation_z(c);
+        let err = (got - want)
+            .abs()
+            .to_cols_array()
+            .iter()
+            .fold(0.0f64, |m, &e| m.max(e));
+        assert!(err < 1e-12, "({yaw}, {pitch}, {roll}) off by {err}");
+    };
+    check(0.0, 0.0, 0.0);
+    check(0.5, 0.3, 0.0);
+    check(-2.9, 1.2, 0.4);
+    check(3.0, -0.5, -0.3);
+    // With no spin the conversion is the identity.
+    assert_eq!(renderer_angles(0.0, 0.4, 0.0), [0.0, 0.4, 0.0]);
+}
+
+#[test]
+fn field_of_view_from_exif_focal_length() {
+    let check = |f: f64, w: u32, h: u32, want: Option<f64>| {
+        let got = fov_from_focal_35mm(f, w, h);
+        match (got, want) {
+            (Some(g), Some(w)) => assert!((g - w).abs() < 1e-3, "{f} mm {w}: {g}"),
+            _ => assert_eq!(got, want),
+        }
+    };
+    // 3:2 landscape = the 36 × 24 frame: vertical fov is 2·atan(12/f).
+    check(50.0, 3000, 2000, Some(2.0 * (12.0f64 / 50.0).atan()));
+    check(26.0, 3000, 2000, Some(2.0 * (12.0f64 / 26.0).atan()));
+    // Portrait: the vertical side is the 36 mm one.
+    check(50.0, 2000, 3000, Some(2.0 * (18.0f64 / 50.0).atan()));
+    check(0.0, 10, 10, None);
+    check(f64::NAN, 10, 10, None);
+    check(50.0, 0, 10, None);
+}
+
+#[test]
+fn mask_statistics_and_handle_side() {
+    // A block with a thin arm on its right: the centroid sits left of the box centre, so the
+    // generator's +X (handle) side goes to the right: yaw 0.
+    let (w, h) = (40u32, 30u32);
+    let v: Vec<f32> = (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let body = (5..20).contains(&x) && (5..25).contains(&y);
+            let arm = (20..32).contains(&x) && (12..14).contains(&y);
+            if body || arm { 1.0 } else { 0.0 }
+        })
+        .collect();
+    let m = procfit::mask::Mask::new(w, h, v).unwrap();
+    let s = mask_stats(&m, 0).unwrap();
+    assert_eq!(
+        (s.bbox_min.x, s.bbox_max.x, s.bbox_min.y, s.bbox_max.y),
+        (5.0, 32.0, 5.0, 25.0)
+    );
+    assert_eq!(s.handle_yaw(), 0.0);
+    let flipped: Vec<f32> = (0..w * h)
+        .map(|i| m.values()[(i / w * w + (w - 1 - i % w)) as usize])
+        .collect();
+    let s = mask_stats(&procfit::mask::Mask::new(w, h, flipped).unwrap(), 0).unwrap();
+    assert_eq!(s.handle_yaw(), std::f64::consts::PI);
+}

@@ -1,0 +1,144 @@
+// The fit step: sends the photos' masks to the worker's fit, shows its progress (stage names,
+// a progress bar with an ETA, the best outline so far over the first photo, the loss curve)
+// and a cancel button, and hands the fitted model to the editor. The worker runs the fit in
+// slices, so the page — and the sliders — stay responsive meanwhile.
+import { REQUESTS } from './protocol.js';
+import { fitCodes } from './masking.js';
+
+/** What each stage does, in words (see reconstruct::session). */
+export const STAGES = {
+  1: 'Stage 1 of 3: searching shapes and camera (coarse)',
+  2: 'Stage 2 of 3: refining the outline',
+  3: 'Stage 3 of 3: polishing at full detail',
+};
+
+let nextFit = 1;
+
+export class FitRunner extends EventTarget {
+  /** `els`: { stage, eta, bar, preview, curve, box }; `client`: the WorkerClient. */
+  constructor({ client, els }) {
+    super();
+    this.client = client;
+    this.els = els;
+    this.running = null;
+  }
+
+  /**
+   * Fits `generator` ('auto' or a name) to `photos` (each with a mask). Resolves with
+   * { cancelled, result, seconds }; rejects with a readable error.
+   */
+  async run({ generator, photos, quality }) {
+    if (this.running) throw new Error('a fit is already running');
+    const masks = photos.map((p) => {
+      const codes = fitCodes(p);
+      return { width: p.mask.width, height: p.mask.height, codes: codes.buffer };
+    });
+    const fitId = nextFit++;
+    const t0 = performance.now();
+    this.running = { fitId };
+    this.curves = { 1: [], 2: [], 3: [] };
+    this.photo = photos[0];
+    this.els.box.hidden = false;
+    this.els.bar.value = 0;
+    this.els.stage.textContent = 'Starting…';
+    this.els.eta.textContent = '';
+    this.drawPreview(null);
+    this.drawCurve();
+    try {
+      const out = await this.client.call(
+        REQUESTS.FIT_RUN,
+        { fitId, generator, seed: 1, quality, masks },
+        { transfer: masks.map((m) => m.codes), onEvent: (event, data) => event === 'progress' && this.progress(data, t0) },
+      );
+      return { ...out, seconds: (performance.now() - t0) / 1000 };
+    } finally {
+      this.running = null;
+    }
+  }
+
+  cancel() {
+    if (!this.running) return;
+    this.client.call(REQUESTS.FIT_CANCEL, { fitId: this.running.fitId }).catch(() => {});
+  }
+
+  progress(p, t0) {
+    const frac = p.work_total > 0 ? Math.min(1, p.work_done / p.work_total) : 0;
+    this.els.bar.value = frac;
+    this.els.stage.textContent = `${STAGES[p.stage] ?? `Stage ${p.stage}`}${p.generator ? ` — ${p.generator}` : ''}`;
+    const elapsed = (performance.now() - t0) / 1000;
+    if (p.done) this.els.eta.textContent = `done in ${elapsed.toFixed(1)} s`;
+    else if (frac > 0.02) this.els.eta.textContent = `about ${formatSeconds((elapsed * (1 - frac)) / frac)} left`;
+    else this.els.eta.textContent = 'estimating time…';
+    if (p.best_loss !== null && p.best_loss !== undefined) this.curves[p.stage]?.push(p.best_loss);
+    this.drawCurve();
+    if (p.preview) this.drawPreview(p.preview);
+    this.dispatchEvent(new CustomEvent('progress', { detail: p }));
+  }
+
+  /** The first photo, dimmed, with the best silhouette's outline over it. */
+  drawPreview(preview) {
+    const c = this.els.preview;
+    const photo = this.photo;
+    if (!photo) return;
+    const w = Math.min(480, photo.width);
+    const h = Math.round((w * photo.height) / photo.width);
+    c.width = w;
+    c.height = h;
+    const ctx = c.getContext('2d');
+    ctx.drawImage(photo.bitmap, 0, 0, w, h);
+    ctx.fillStyle = 'rgba(255,255,255,0.35)';
+    ctx.fillRect(0, 0, w, h);
+    if (!preview) return;
+    const cov = new Uint8Array(preview.coverage);
+    const sil = new OffscreenCanvas(preview.width, preview.height);
+    const sctx = sil.getContext('2d');
+    const img = sctx.createImageData(preview.width, preview.height);
+    for (let i = 0; i < cov.length; i += 1) img.data.set([255, 120, 0, Math.round(cov[i] * 0.6)], 4 * i);
+    sctx.putImageData(img, 0, 0);
+    ctx.imageSmoothingEnabled = true;
+    ctx.drawImage(sil, 0, 0, w, h);
+  }
+
+  /** One polyline per stage (losses of different stages do not compare), each on its own scale. */
+  drawCurve() {
+    const c = this.els.curve;
+    const ctx = c.getContext('2d');
+    const { width: W, height: H } = c;
+    ctx.clearRect(0, 0, W, H);
+    const colours = { 1: '#2456c8', 2: '#c8561f', 3: '#2e8b57' };
+    const slot = W / 3;
+    for (const s of [1, 2, 3]) {
+      const ys = this.curves?.[s] ?? [];
+      const x0 = (s - 1) * slot;
+      ctx.fillStyle = '#66666b';
+      ctx.font = '12px system-ui, sans-serif';
+      ctx.fillText(`stage ${s}`, x0 + 6, 14);
+      if (s > 1) {
+        ctx.strokeStyle = '#d6d3cc';
+        ctx.beginPath();
+        ctx.moveTo(x0, 0);
+        ctx.lineTo(x0, H);
+        ctx.stroke();
+      }
+      if (ys.length < 1) continue;
+      const lo = Math.min(...ys);
+      const hi = Math.max(...ys);
+      const span = hi - lo || 1;
+      ctx.strokeStyle = colours[s];
+      ctx.lineWidth = 2;
+      ctx.beginPath();
+      ys.forEach((y, i) => {
+        const px = x0 + 6 + ((slot - 12) * i) / Math.max(1, ys.length - 1);
+        const py = 24 + (H - 32) * ((hi - y) / span);
+        if (i) ctx.lineTo(px, py);
+        else ctx.moveTo(px, py);
+      });
+      ctx.stroke();
+    }
+  }
+}
+
+function formatSeconds(s) {
+  if (s < 60) return `${Math.max(1, Math.round(s))} s`;
+  return `${Math.floor(s / 60)} min ${Math.round(s % 60)} s`;
+}
