@@ -177,15 +177,27 @@ fn fields(positions: &[Vec3], n: usize) -> Vec<Vec<Vec3>> {
         .collect()
 }
 
-fn judge(name: &str, what: &str, pairs: &[(f64, f64, f64)], (mean_max, max_max): (f64, f64)) {
+/// Labels of [`check`]'s derivatives: the view parameters, then the deformation fields.
+fn view_and_field_labels() -> Vec<String> {
+    ViewParams::NAMES
+        .iter()
+        .map(|n| n.to_string())
+        .chain((0..4).map(|i| format!("field{i}")))
+        .collect()
+}
+
+fn judge(
+    name: &str,
+    what: &str,
+    labels: &[String],
+    pairs: &[(f64, f64, f64)],
+    (mean_max, max_max): (f64, f64),
+) {
     let errs = rel_errors(pairs);
     let mean = errs.iter().sum::<f64>() / errs.len() as f64;
     let max = errs.iter().copied().fold(0.0, f64::max);
-    let names = ViewParams::NAMES
+    let table: Vec<String> = labels
         .iter()
-        .map(|n| n.to_string())
-        .chain((0..).map(|i| format!("field{i}")));
-    let table: Vec<String> = names
         .zip(pairs.iter().zip(&errs))
         .map(|(n, ((g, fd, _), e))| format!("  {n}: {g:.4e} vs fd {fd:.4e} (err {e:.3})"))
         .collect();
@@ -261,9 +273,21 @@ fn check(name: &str, s: Scene, fd: Fd, tol: Tol) {
         "{name}: a finite difference is zero, the scene does not exercise it"
     );
     let exact = analytic(&s, Some(fd.ss), &dirs);
-    judge(name, "exact", &pairs(&exact, &fds), tol.exact);
+    judge(
+        name,
+        "exact",
+        &view_and_field_labels(),
+        &pairs(&exact, &fds),
+        tol.exact,
+    );
     let product = analytic(&s, None, &dirs);
-    judge(name, "product", &pairs(&product, &fds), tol.product);
+    judge(
+        name,
+        "product",
+        &view_and_field_labels(),
+        &pairs(&product, &fds),
+        tol.product,
+    );
 }
 
 /// The harness itself: a gradient that is silently zero (or has lost a factor of two) must
@@ -279,11 +303,23 @@ fn zero_or_halved_gradients_fail_the_check() {
         good.iter().map(|g| 0.5 * g).collect(),
     ] {
         let r = std::panic::catch_unwind(|| {
-            judge("corrupted", "test", &pairs(&bad, &fds), TOL.product)
+            judge(
+                "corrupted",
+                "test",
+                &view_and_field_labels(),
+                &pairs(&bad, &fds),
+                TOL.product,
+            )
         });
         assert!(r.is_err(), "a corrupted gradient passed the check");
     }
-    judge("cube", "product", &pairs(&good, &fds), TOL.product);
+    judge(
+        "cube",
+        "product",
+        &view_and_field_labels(),
+        &pairs(&good, &fds),
+        TOL.product,
+    );
 }
 
 #[test]
@@ -336,4 +372,36 @@ fn gradients_of_thin_parts_match_finite_differences() {
         FD_THIN,
         tol,
     );
+}
+
+/// Every coordinate of every cube vertex on its own (the hidden back corner must get zero).
+#[test]
+fn per_vertex_gradients_of_a_cube_match_finite_differences() {
+    let s = scene(transformed(&cube(0.4), 1.0, Vec3::new(0.15, 0.1, 0.0)), 0.3);
+    let mut out = Vec::new();
+    for (what, adjoint_ss) in [("exact", Some(FD.ss)), ("product", None)] {
+        let (gp, _) = grads(&s, adjoint_ss);
+        let mut pairs = Vec::new();
+        for v in 0..s.mesh.positions.len() {
+            for axis in 0..3 {
+                let moved = |d: f32| {
+                    let mut p = s.mesh.positions.clone();
+                    p[v][axis] += d;
+                    p
+                };
+                let e = EPS_POS;
+                let fd = (reference_loss(&s, &moved(e as f32), &s.view.params, FD.ss)
+                    - reference_loss(&s, &moved(-e as f32), &s.view.params, FD.ss))
+                    / (2.0 * e);
+                pairs.push((f64::from(gp[v][axis]), fd, e));
+            }
+        }
+        out.push((what, pairs));
+    }
+    let labels: Vec<String> = (0..s.mesh.positions.len())
+        .flat_map(|v| ["x", "y", "z"].map(|a| format!("v{v}.{a}")))
+        .collect();
+    assert!(out[0].1.iter().filter(|p| p.1 != 0.0).count() >= 12);
+    judge("cube vertices", out[0].0, &labels, &out[0].1, TOL.exact);
+    judge("cube vertices", out[1].0, &labels, &out[1].1, TOL.product);
 }

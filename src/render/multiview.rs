@@ -60,13 +60,11 @@ impl MultiViewLoss {
         })
     }
 
-    /// Runs views (and the work inside each render) on rayon's pool. Results are
-    /// bit-identical either way.
+    /// Runs the views on rayon's pool (each render itself stays on one thread: below ~20k
+    /// vertices a render takes well under a millisecond and splitting it costs more than it
+    /// gains, see `benches/render.rs`). Results are bit-identical either way.
     pub fn set_parallel(&mut self, parallel: bool) {
         self.parallel = parallel;
-        for s in &mut self.slots {
-            s.renderer.set_parallel(parallel);
-        }
     }
 
     /// Number of views.
