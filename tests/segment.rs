@@ -9,8 +9,8 @@ use image::{DynamicImage, ExtendedColorType, ImageEncoder, RgbImage, RgbaImage};
 use procfit::mask::Mask;
 use procfit::segment::windows::{LABEL_WINDOW, detect_windows, windows_from_strokes};
 use procfit::segment::{
-    BBox, Label, Options, Photo, Segmentation, Session, Stroke, WORKING_SIDE, segment_alpha,
-    segment_auto, segment_mask_image,
+    BBox, Label, Options, Photo, Segmentation, Session, Stroke, WORKING_SIDE, segment,
+    segment_alpha, segment_auto, segment_mask_image,
 };
 
 // ---------------------------------------------------------------- synthetic photos
@@ -39,6 +39,8 @@ enum Bg {
     Textured,
     /// Wall above, a wooden table below 70 % of the height.
     Table,
+    /// Sharp-edged cells of many colours (a patterned cloth): strong edges everywhere.
+    Cells,
 }
 
 fn background(bg: Bg, u: f32, v: f32, rng: &mut Rng) -> [f32; 3] {
@@ -61,6 +63,38 @@ fn background(bg: Bg, u: f32, v: f32, rng: &mut Rng) -> [f32; 3] {
             } else {
                 [0.80 + stripe, 0.82 + stripe, 0.84 + stripe]
             }
+        }
+        Bg::Cells => {
+            const PALETTE: [[f32; 3]; 6] = [
+                [0.35, 0.55, 0.3],
+                [0.2, 0.3, 0.55],
+                [0.85, 0.75, 0.35],
+                [0.6, 0.6, 0.62],
+                [0.5, 0.35, 0.6],
+                [0.15, 0.2, 0.3],
+            ];
+            let hash = |a: i32, b: i32, k: u32| {
+                let mut x =
+                    (a as u32).wrapping_mul(73_856_093) ^ (b as u32).wrapping_mul(19_349_663) ^ k;
+                x ^= x >> 13;
+                x = x.wrapping_mul(0x5bd1_e995);
+                x ^= x >> 15;
+                x
+            };
+            let (gx, gy) = (u * 12.0, v * 9.0);
+            let mut best = (f32::INFINITY, 0u32);
+            for dy in -1..=1 {
+                for dx in -1..=1 {
+                    let (cx, cy) = (gx.floor() as i32 + dx, gy.floor() as i32 + dy);
+                    let px = cx as f32 + (hash(cx, cy, 1) % 1000) as f32 / 1000.0;
+                    let py = cy as f32 + (hash(cx, cy, 2) % 1000) as f32 / 1000.0;
+                    let d = (px - gx).powi(2) + (py - gy).powi(2);
+                    if d < best.0 {
+                        best = (d, hash(cx, cy, 3));
+                    }
+                }
+            }
+            PALETTE[(best.1 % 6) as usize]
         }
         Bg::Table => {
             if v > 0.7 {
@@ -248,6 +282,17 @@ fn check_auto(bg: Bg, min_iou: f64) {
     let (img, truth) = render(&scene, 11);
     let photo = Photo::decode(&jpeg(&img, 85), WORKING_SIDE).unwrap();
     let seg = segment_auto(&photo).unwrap();
+    if let Ok(dir) = std::env::var("PROCFIT_SEGMENT_DEBUG_DIR") {
+        // Look at what was segmented: the input and the mask (grey = don't care).
+        img.save(format!("{dir}/auto_{bg:?}.png")).unwrap();
+        let m = png(
+            &seg.mask.to_luma8(),
+            scene.w,
+            scene.h,
+            ExtendedColorType::L8,
+        );
+        std::fs::write(format!("{dir}/auto_{bg:?}_mask.png"), m).unwrap();
+    }
     let got = object_of(&seg);
     let score = iou(&got, &truth);
     eprintln!(
@@ -312,6 +357,10 @@ fn auto_noisy() {
 #[test]
 fn auto_textured() {
     check_auto(Bg::Textured, 0.92);
+}
+#[test]
+fn auto_cells() {
+    check_auto(Bg::Cells, 0.92);
 }
 #[test]
 fn auto_table() {
@@ -414,6 +463,72 @@ fn background_stroke_removes_a_wrongly_included_saucer() {
 }
 
 #[test]
+fn object_stroke_keeps_a_part_cut_off_by_a_background_coloured_band() {
+    // A wall-coloured band around the cup's foot splits it in two: automatic mode keeps the
+    // larger upper part only; an object stroke on the foot brings it back.
+    let y0 = 0.62;
+    let band = Shape::Rect([0.3, y0, 0.95, y0 + 0.04], [0.86, 0.86, 0.83]);
+    let scene = Scene {
+        w: 360,
+        h: 270,
+        bg: Bg::Plain,
+        shapes: vec![band, Shape::Cup(CUP)],
+        truth_shapes: 2,
+    };
+    let (img, truth) = render(&scene, 21);
+    let s = scene.h as f32;
+    let foot: Vec<usize> = (0..truth.len())
+        .filter(|&i| truth[i] && (i / scene.w as usize) as f32 > (y0 + 0.05) * s)
+        .collect();
+    let kept = |seg: &Segmentation| {
+        let o = object_of(seg);
+        foot.iter().filter(|&&i| o[i]).count() as f64 / foot.len() as f64
+    };
+    let photo = Photo::decode(&jpeg(&img, 85), WORKING_SIDE).unwrap();
+    let mut session = Session::automatic(&photo, &Options::default()).unwrap();
+    let before = kept(session.segmentation());
+    assert!(before < 0.05, "the foot should be lost at first: {before}");
+    session
+        .add_stroke(&Stroke {
+            label: Label::Object,
+            points: vec![[CUP.cx * s, (CUP.bottom - 0.05) * s]],
+            radius: 3.0,
+        })
+        .unwrap();
+    let after = kept(session.recut().unwrap());
+    eprintln!("foot: {before:.3} kept before the stroke, {after:.3} after");
+    assert!(after >= 0.97, "after the stroke the foot is {after} kept");
+}
+
+/// Touch-up strokes straddling the outline (half on the cup, half on the wall) fix their own
+/// pixels and must not take their colours out of either model: a background stroke that
+/// half covers the cup would otherwise remove the cup's red from the object model.
+#[test]
+fn sloppy_strokes_across_the_outline_keep_the_mask() {
+    check_sloppy(Label::Object);
+    check_sloppy(Label::Background);
+}
+
+fn check_sloppy(label: Label) {
+    let scene = cup_scene(Bg::Gradient);
+    let (img, truth) = render(&scene, 17);
+    let photo = Photo::decode(&jpeg(&img, 85), WORKING_SIDE).unwrap();
+    let mut session = Session::automatic(&photo, &Options::default()).unwrap();
+    let s = scene.h as f32;
+    let edge = CUP.cx - CUP.radius(0.3).unwrap();
+    session
+        .add_stroke(&Stroke {
+            label,
+            points: vec![[(edge - 0.04) * s, 0.3 * s], [(edge + 0.04) * s, 0.3 * s]],
+            radius: 6.0,
+        })
+        .unwrap();
+    let score = iou(&object_of(session.recut().unwrap()), &truth);
+    eprintln!("sloppy {label:?} stroke: IoU {score:.4}");
+    assert!(score >= 0.97, "IoU {score} after a sloppy {label:?} stroke");
+}
+
+#[test]
 fn rectangle_selects_the_smaller_of_two_objects() {
     let small = Cup {
         cx: 1.0,
@@ -472,6 +587,11 @@ fn alpha_channel_gives_the_mask() {
     let photo = Photo::decode(&bytes, WORKING_SIDE).unwrap();
     let seg = segment_alpha(&photo).unwrap();
     assert_eq!(object_of(&seg), truth);
+    assert_eq!(
+        segment(&photo).unwrap(),
+        seg,
+        "segment() prefers the alpha channel"
+    );
     assert!(!seg.is_low_confidence());
     let opaque = Photo::decode(&jpeg(&img, 80), WORKING_SIDE).unwrap();
     assert!(
@@ -517,10 +637,16 @@ fn large_photo_is_downscaled_before_segmentation() {
     let photo = Photo::decode(&jpeg(&img, 85), WORKING_SIDE).unwrap();
     assert_eq!((photo.width(), photo.height()), (512, 384));
     assert_eq!(photo.source_size(), (1600, 1200));
+    // The browser path: raw RGBA of the same photo, downscaled the same way.
+    let rgba = DynamicImage::ImageRgb8(img).to_rgba8();
+    let raw = Photo::from_rgba(1600, 1200, rgba.as_raw(), WORKING_SIDE).unwrap();
+    assert_eq!((raw.width(), raw.height()), (512, 384));
     (scene.w, scene.h) = (512, 384);
     let (_, truth) = render(&scene, 2);
-    let score = iou(&object_of(&segment_auto(&photo).unwrap()), &truth);
-    assert!(score >= 0.97, "IoU {score}");
+    for p in [&photo, &raw] {
+        let score = iou(&object_of(&segment(p).unwrap()), &truth);
+        assert!(score >= 0.97, "IoU {score}");
+    }
 }
 
 // ---------------------------------------------------------------- windows
@@ -573,7 +699,8 @@ fn windows_detected_and_painted() {
     let labels = detect_windows(&photo, &seg).unwrap();
     let got: Vec<bool> = labels.labels().iter().map(|&l| l == LABEL_WINDOW).collect();
     let score = iou(&got, &win_truth);
-    assert!(score >= 0.85, "detected windows: IoU {score}");
+    eprintln!("windows: detected IoU {score:.4}");
+    assert!(score >= 0.9, "detected windows: IoU {score}");
     // Strokes: two windows painted, one wall stroke.
     let centre = |r: [f32; 4]| [(r[0] + r[2]) / 2.0 * s, (r[1] + r[3]) / 2.0 * s];
     let strokes = [
@@ -596,7 +723,8 @@ fn windows_detected_and_painted() {
     let labels = windows_from_strokes(&photo, &seg, &strokes).unwrap();
     let got: Vec<bool> = labels.labels().iter().map(|&l| l == LABEL_WINDOW).collect();
     let score = iou(&got, &win_truth);
-    assert!(score >= 0.85, "painted windows: IoU {score}");
+    eprintln!("windows: painted IoU {score:.4}");
+    assert!(score >= 0.95, "painted windows: IoU {score}");
 }
 
 // ---------------------------------------------------------------- bad input
@@ -662,8 +790,12 @@ fn truncated_jpeg_is_an_error_or_a_usable_photo_never_a_panic() {
     let bytes = jpeg(&img, 85);
     for keep in [20, 200, bytes.len() / 3, bytes.len() / 2, bytes.len() - 10] {
         match Photo::decode(&bytes[..keep], WORKING_SIDE) {
-            Err(e) => assert!(e.0.contains("cannot"), "{keep} bytes: {e}"),
+            Err(e) => {
+                eprintln!("truncated to {keep} bytes: {e}");
+                assert!(e.0.contains("cannot"), "{keep} bytes: {e}");
+            }
             Ok(photo) => {
+                eprintln!("truncated to {keep} bytes: decoded");
                 // Whatever the decoder made of it must segment without panicking.
                 let _ = segment_auto(&photo);
             }
@@ -722,6 +854,10 @@ fn object_filling_the_frame_is_flagged() {
     let (img, _) = render(&scene, 12);
     let photo = Photo::decode(&jpeg(&img, 85), WORKING_SIDE).unwrap();
     let seg = segment_auto(&photo).unwrap();
+    eprintln!(
+        "frame-filling cup: {:?}, confidence {}",
+        seg.warnings, seg.confidence
+    );
     assert!(
         seg.is_low_confidence(),
         "{:?} {}",
@@ -743,11 +879,18 @@ fn bad_strokes_and_rectangles_are_refused() {
     assert!(s.add_stroke(&stroke(vec![[f32::NAN, 1.0]], 2.0)).is_err());
     assert!(s.add_stroke(&stroke(vec![], 2.0)).is_err());
     assert!(s.add_stroke(&stroke(vec![[1.0, 1.0]], 0.0)).is_err());
-    // Off-image strokes are clipped, not refused.
+    // Off-image strokes are clipped, not refused; clearing them restores the automatic mask.
+    let initial = object_of(s.segmentation());
+    let diagonal = stroke(vec![[-50.0, -50.0], [1e6, 1e6]], 3.0);
+    assert!(s.add_stroke(&diagonal).is_ok());
+    let stroked = object_of(s.recut().unwrap());
     assert!(
-        s.add_stroke(&stroke(vec![[-50.0, -50.0], [1e6, 1e6]], 3.0))
-            .is_ok()
+        iou(&stroked, &initial) < 0.99,
+        "the diagonal stroke cuts the cup"
     );
+    s.clear_strokes();
+    let cleared = object_of(s.recut().unwrap());
+    assert!(iou(&cleared, &initial) > 0.995);
     let bad = BBox {
         x0: 10,
         y0: 10,
@@ -815,4 +958,123 @@ fn coffee_photo_smoke_test() {
     ] {
         assert!(got.abs_diff(want) <= tol, "bbox {b:?}");
     }
+}
+
+// ---------------------------------------------------------------- tidy
+
+/// `std::time::Instant` panics on wasm32: segmentation code must never read a clock.
+#[test]
+fn segmentation_code_reads_no_clock() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/src/segment");
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        let text = std::fs::read_to_string(&path).unwrap();
+        for (n, line) in text.lines().enumerate() {
+            let code = line.split("//").next().unwrap_or("");
+            assert!(
+                !code.contains("Instant") && !code.contains("SystemTime"),
+                "{}:{}: {line}",
+                path.display(),
+                n + 1
+            );
+        }
+    }
+}
+
+/// A hand-made 16×16 baseline JPEG with four components (Adobe CMYK, no transform), each
+/// uniform: only DC coefficients, standard luminance DC table, a one-code AC table (EOB).
+fn cmyk_jpeg(cmyk: [u8; 4]) -> Vec<u8> {
+    let mut j = vec![0xFF, 0xD8];
+    // APP14 "Adobe", version 100, flags 0, transform 0 (CMYK as is).
+    j.extend([0xFF, 0xEE, 0, 14]);
+    j.extend(b"Adobe");
+    j.extend([0, 100, 0, 0, 0, 0, 0]);
+    // One quantisation table of ones.
+    j.extend([0xFF, 0xDB, 0, 67, 0]);
+    j.extend([1u8; 64]);
+    // SOF0: 8-bit, 16×16, four components, no subsampling, table 0.
+    j.extend([0xFF, 0xC0, 0, 20, 8, 0, 16, 0, 16, 4]);
+    for id in 1..=4 {
+        j.extend([id, 0x11, 0]);
+    }
+    // DC table 0 (standard luminance) and AC table 0 holding only EOB as the code "0".
+    let dc_bits = [0u8, 1, 5, 1, 1, 1, 1, 1, 1, 0, 0, 0, 0, 0, 0, 0];
+    j.extend([0xFF, 0xC4, 0, 2 + 17 + 12, 0x00]);
+    j.extend(dc_bits);
+    j.extend(0u8..12);
+    j.extend([0xFF, 0xC4, 0, 2 + 17 + 1, 0x10, 1]);
+    j.extend([0u8; 15]);
+    j.push(0);
+    // SOS over the four components.
+    j.extend([0xFF, 0xDA, 0, 14, 4]);
+    for id in 1..=4 {
+        j.extend([id, 0x00]);
+    }
+    j.extend([0, 63, 0]);
+    // Standard DC luminance codes per category (code, length).
+    let dc_code = |cat: u32| -> (u32, u32) {
+        match cat {
+            0 => (0b00, 2),
+            1 => (0b010, 3),
+            2 => (0b011, 3),
+            3 => (0b100, 3),
+            4 => (0b101, 3),
+            5 => (0b110, 3),
+            c => ((1 << (c - 2)) - 2, c - 2),
+        }
+    };
+    let mut bits: Vec<bool> = Vec::new();
+    let put = |v: u32, n: u32, bits: &mut Vec<bool>| {
+        for k in (0..n).rev() {
+            bits.push(v >> k & 1 == 1);
+        }
+    };
+    for mcu in 0..4 {
+        for &c in &cmyk {
+            let diff = if mcu == 0 {
+                8 * (i32::from(c) - 128)
+            } else {
+                0
+            };
+            let cat = 32 - diff.unsigned_abs().leading_zeros();
+            let (code, len) = dc_code(cat);
+            put(code, len, &mut bits);
+            let extra = if diff < 0 { diff - 1 } else { diff } as u32 & ((1 << cat) - 1);
+            put(extra, cat, &mut bits);
+            put(0, 1, &mut bits); // EOB
+        }
+    }
+    while !bits.len().is_multiple_of(8) {
+        bits.push(true);
+    }
+    for byte in bits.chunks(8) {
+        let b = byte.iter().fold(0u8, |a, &x| a << 1 | u8::from(x));
+        j.push(b);
+        if b == 0xFF {
+            j.push(0);
+        }
+    }
+    j.extend([0xFF, 0xD9]);
+    j
+}
+
+/// CMYK JPEGs (Adobe's inverted convention, as Photoshop writes them) decode to RGB
+/// `(c·k, m·k, y·k) / 255` of the stored values.
+#[test]
+fn cmyk_jpeg_decodes_to_rgb() {
+    let cmyk = [20u8, 200, 180, 250];
+    let photo = Photo::decode(&cmyk_jpeg(cmyk), WORKING_SIDE).unwrap();
+    assert_eq!((photo.width(), photo.height()), (16, 16));
+    let k = f32::from(cmyk[3]) / 255.0;
+    let want = [0, 1, 2].map(|c| f32::from(cmyk[c]) * k);
+    for p in photo.rgba().chunks_exact(4) {
+        for c in 0..3 {
+            assert!(
+                (f32::from(p[c]) - want[c]).abs() <= 2.0,
+                "{p:?} vs {want:?}"
+            );
+        }
+    }
+    // A uniform photo has no object: flagged, not a panic.
+    assert!(segment_auto(&photo).unwrap().is_low_confidence());
 }

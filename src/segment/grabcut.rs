@@ -10,7 +10,18 @@
 //! border. The object may touch one border (it stands on a table or the floor): each side of the
 //! border is tested against a model of the other three, and a side whose colours the others do
 //! not explain gets no hard background constraint and lends only its explained pixels to the
-//! border model.
+//! border model. Pixels whose colour the border model does not explain start as object.
+//!
+//! Automatic mode runs coarse to fine: the photo is first segmented at half size (recursively,
+//! down to ~160×120), and the full-size cuts then only relabel a band of six pixels around
+//! the upsampled outline — the expensive part of a cut is settling the whole image, which the
+//! small image does cheaply.
+//!
+//! Clean-up keeps the largest 8-connected component (plus any component the user marked as
+//! object) and fills holes, except holes whose colours the border model explains (the loop of
+//! a handle shows the background) and holes the user marked as background.
+//!
+//! Everything is deterministic (no random seeds, no clock), so tests and the page agree.
 
 use super::decode::area_resample;
 use super::gmm::{Gmm, Rgb};
@@ -22,6 +33,8 @@ use crate::mask::Mask;
 /// Photos with at least this many pixels are first segmented at half size (coarse to fine);
 /// the half-size image then has at least 160×120 pixels.
 const COARSE_MIN_PIXELS: usize = 4 * 160 * 120;
+/// Half-width of the band around the coarse outline that full-size cuts may relabel.
+const BAND: usize = 6;
 /// Smoothness weight γ of GrabCut's energy (eq. 11; the paper's value).
 const GAMMA: f32 = 50.0;
 /// Capacity of a hard constraint: larger than any cut through a pixel's eight n-links.
@@ -41,12 +54,23 @@ const STROKE_MARGIN: f32 = 6.0;
 const NONE: u8 = 0;
 const HARD_FG: u8 = 1;
 const HARD_BG: u8 = 2;
-/// Background painted by a user stroke (a statement about its colour too, unlike the border
-/// ring or the outside of a rectangle).
+/// Background painted by a correcting user stroke: a statement about its colour too (see
+/// [`Session::add_stroke`]).
 const STROKE_BG: u8 = 3;
+/// Background painted by a user stroke that only fixes its own pixels.
+const PAINT_BG: u8 = 4;
+/// Object painted by a correcting user stroke (colour semantics, like [`STROKE_BG`]).
+const STROKE_FG: u8 = 5;
+/// Share of a stroke's pixels that must have had the opposite label for the stroke to count
+/// as a correction of a colour rather than a touch-up of pixels.
+const CORRECTION_SHARE: f32 = 0.8;
 
 fn is_bg(h: u8) -> bool {
-    h == HARD_BG || h == STROKE_BG
+    h == HARD_BG || h == STROKE_BG || h == PAINT_BG
+}
+
+fn is_fg(h: u8) -> bool {
+    h == HARD_FG || h == STROKE_FG
 }
 
 /// Options of automatic segmentation.
@@ -114,7 +138,9 @@ impl Session {
                 s.hard[y * w + w - 1] = HARD_BG;
             }
         }
-        s.labels = match coarse_labels(photo, opts)? {
+        let start = coarse_labels(photo, opts)?;
+        let coarse = start.is_some();
+        s.labels = match start {
             // Coarse to fine: the half-size result starts the fit here, so the full-size cuts
             // only move the outline (cheap) instead of settling the whole image (costly).
             Some(coarse) => (0..w * h).map(|i| !is_bg(s.hard[i]) && coarse[i]).collect(),
@@ -126,7 +152,7 @@ impl Session {
             }
         };
         let iterations = s.opts.iterations;
-        s.run(iterations, true)?;
+        s.run(iterations, true, coarse)?;
         Ok(s)
     }
 
@@ -137,7 +163,7 @@ impl Session {
         s.set_rect(rect)?;
         s.labels = (0..s.w * s.h).map(|i| !is_bg(s.hard[i])).collect();
         let iterations = s.opts.iterations;
-        s.run(iterations, true)?;
+        s.run(iterations, true, false)?;
         Ok(s)
     }
 
@@ -170,16 +196,40 @@ impl Session {
     }
 
     /// Paints a stroke of hard constraints (object or background) along a polyline.
+    ///
+    /// A stroke lying mostly (≥ 80 %) on pixels that had the other label is a correction and
+    /// also speaks for its colours: "this stuff is background" removes the stroke's colours from
+    /// the object's colour model (and vice versa), so a whole wrongly included region goes with
+    /// one stroke. A stroke that straddles the outline (a touch-up, or a sloppy one) only fixes
+    /// its own pixels, so it cannot flood the image.
     pub fn add_stroke(&mut self, stroke: &Stroke) -> Result<(), SegmentError> {
-        let value = match stroke.label {
-            Label::Object => HARD_FG,
-            Label::Background => STROKE_BG,
-        };
         let (w, h) = (self.w, self.h);
-        for_stroke_pixels(stroke, w, h, |i| {
+        let mut pixels = Vec::new();
+        for_stroke_pixels(stroke, w, h, |i| pixels.push(i))?;
+        let object = stroke.label == Label::Object;
+        let opposite = pixels.iter().filter(|&&i| self.labels[i] != object).count();
+        let correction = opposite as f32 >= CORRECTION_SHARE * pixels.len() as f32;
+        let value = match (object, correction) {
+            (true, true) => STROKE_FG,
+            (true, false) => HARD_FG,
+            (false, true) => STROKE_BG,
+            (false, false) => PAINT_BG,
+        };
+        for i in pixels {
             self.hard[i] = value;
-            self.labels[i] = value == HARD_FG;
-        })
+            self.labels[i] = object;
+        }
+        Ok(())
+    }
+
+    /// Forgets every stroke (the rectangle or border constraints stay); call
+    /// [`Session::recut`] afterwards.
+    pub fn clear_strokes(&mut self) {
+        for h in &mut self.hard {
+            if *h != HARD_BG {
+                *h = NONE;
+            }
+        }
     }
 
     /// Re-runs the cut after rectangles or strokes changed: fits the colour models to the
@@ -188,7 +238,7 @@ impl Session {
         let iterations = self.opts.recut_iterations.max(1);
         // Fresh fits: a stroke can remove a colour from a model entirely, which a refit of the
         // old components (one of them fitted to that colour) would not do.
-        self.run(iterations, true)?;
+        self.run(iterations, true, false)?;
         Ok(&self.result)
     }
 
@@ -240,20 +290,29 @@ impl Session {
 
     /// Colour-model fits and cuts; with `fresh` the first fit starts from k-means instead of the
     /// previous models (later ones always refine the previous models, as GrabCut does).
-    fn run(&mut self, iterations: usize, fresh: bool) -> Result<(), SegmentError> {
+    ///
+    /// With `band`, each cut only relabels pixels within [`BAND`] of the current outline (the
+    /// outline came from the half-size result, so it is off by a pixel or two at most).
+    fn run(&mut self, iterations: usize, fresh: bool, band: bool) -> Result<(), SegmentError> {
         let n = self.w * self.h;
         let min_object = (n / 2000).max(4);
         for it in 0..iterations {
             let hard = &self.hard;
             let fit_labels =
-                morph::largest_component(&self.labels, self.w, self.h, &|i| hard[i] == HARD_FG);
+                morph::largest_component(&self.labels, self.w, self.h, &|i| is_fg(hard[i]));
             let fg_count = fit_labels.iter().filter(|&&l| l).count();
             if fg_count < min_object {
                 self.labels = fit_labels;
                 break;
             }
             self.fit_models(&fit_labels, fresh && it == 0)?;
-            let changed = self.cut();
+            let changed = if band {
+                let active = morph::boundary_band(&fit_labels, self.w, self.h, BAND);
+                self.labels = fit_labels;
+                self.cut_band(&active)
+            } else {
+                self.cut()
+            };
             // Converged: another colour fit would reproduce the same cut.
             if changed <= n / 2000 {
                 break;
@@ -266,20 +325,20 @@ impl Session {
         // Colours the user marked as background are no evidence for the object, and vice
         // versa: a stroke means "this colour belongs there", not only "these pixels".
         let exclude_fg = stroke_colour_filter(&self.colors, &self.hard, STROKE_BG);
-        let exclude_bg = stroke_colour_filter(&self.colors, &self.hard, HARD_FG);
+        let exclude_bg = stroke_colour_filter(&self.colors, &self.hard, STROKE_FG);
         let mut fg_s = Vec::new();
         let mut bg_s = Vec::new();
         let n = labels.len();
         let stride = (n / MAX_SAMPLES).max(1);
         for i in (0..n).step_by(stride) {
             let c = &self.colors[i];
-            let is_fg = match self.hard[i] {
-                HARD_FG => true,
+            let object = match self.hard[i] {
+                h if is_fg(h) => true,
                 h if is_bg(h) => false,
                 _ => labels[i],
             };
-            if is_fg {
-                if self.hard[i] == HARD_FG || !exclude_fg.as_ref().is_some_and(|f| f(c)) {
+            if object {
+                if is_fg(self.hard[i]) || !exclude_fg.as_ref().is_some_and(|f| f(c)) {
                     fg_s.push(*c);
                 }
             } else if is_bg(self.hard[i]) || !exclude_bg.as_ref().is_some_and(|f| f(c)) {
@@ -290,7 +349,7 @@ impl Session {
         for i in 0..n {
             if i % stride != 0 {
                 match self.hard[i] {
-                    HARD_FG if fg_s.len() < 2 * MAX_SAMPLES => fg_s.push(self.colors[i]),
+                    h if is_fg(h) && fg_s.len() < 2 * MAX_SAMPLES => fg_s.push(self.colors[i]),
                     h if is_bg(h) && bg_s.len() < 2 * MAX_SAMPLES && i % 4 == 0 => {
                         bg_s.push(self.colors[i])
                     }
@@ -332,7 +391,7 @@ impl Session {
         let (hard, dfg, dbg) = (&self.hard, &self.dfg, &self.dbg);
         let g = &mut self.graph;
         cut_grid(g, w, h, &self.nlinks, true, |i| match hard[i] {
-            HARD_FG => HARD,
+            h if is_fg(h) => HARD,
             h if is_bg(h) => -HARD,
             // Only the difference of the data terms matters to the cut.
             _ => dbg[i] - dfg[i],
@@ -346,17 +405,92 @@ impl Session {
         changed
     }
 
+    /// A cut restricted to the `active` pixels; the others keep their labels and act on their
+    /// active neighbours through the n-links, as terminal links. Returns the changed count.
+    fn cut_band(&mut self, active: &[bool]) -> usize {
+        let (Some(fg), Some(bg)) = (&self.fg, &self.bg) else {
+            return 0;
+        };
+        let (w, h) = (self.w, self.h);
+        for (i, c) in self.colors.iter().enumerate() {
+            self.dfg[i] = fg.nll(c);
+            self.dbg[i] = bg.nll(c);
+        }
+        let mut node = vec![u32::MAX; w * h];
+        let mut pixels = Vec::new();
+        for (i, _) in active.iter().enumerate().filter(|(_, a)| **a) {
+            node[i] = pixels.len() as u32;
+            pixels.push(i);
+        }
+        let g = &mut self.graph;
+        g.reset(pixels.len(), 4 * pixels.len());
+        // Neighbour offsets with the index of their weight in `nlinks` (of the upper-left pixel
+        // of the pair, which stores it).
+        let dirs: [(isize, isize, usize); 8] = [
+            (1, 0, 0),
+            (0, 1, 1),
+            (1, 1, 2),
+            (-1, 1, 3),
+            (-1, 0, 0),
+            (0, -1, 1),
+            (-1, -1, 2),
+            (1, -1, 3),
+        ];
+        for (k, &i) in pixels.iter().enumerate() {
+            let mut d = match self.hard[i] {
+                h if is_fg(h) => HARD,
+                h if is_bg(h) => -HARD,
+                _ => self.dbg[i] - self.dfg[i],
+            };
+            let (x, y) = ((i % w) as isize, (i / w) as isize);
+            for (n, &(dx, dy, slot)) in dirs.iter().enumerate() {
+                let (nx, ny) = (x + dx, y + dy);
+                if nx < 0 || ny < 0 || nx >= w as isize || ny >= h as isize {
+                    continue;
+                }
+                let j = ny as usize * w + nx as usize;
+                let wgt = if n < 4 {
+                    self.nlinks[i][slot]
+                } else {
+                    self.nlinks[j][slot]
+                };
+                if node[j] == u32::MAX {
+                    // A fixed neighbour pulls towards its own label.
+                    d += if self.labels[j] { wgt } else { -wgt };
+                } else if n < 4 {
+                    g.add_edge(k, node[j] as usize, wgt, wgt);
+                }
+            }
+            let d = d.clamp(-HARD, HARD);
+            if d > 0.0 {
+                g.add_tweights(k, d, 0.0);
+            } else {
+                g.add_tweights(k, 0.0, -d);
+            }
+        }
+        g.maxflow();
+        let mut changed = 0;
+        for (k, &i) in pixels.iter().enumerate() {
+            let l = g.is_source(k);
+            changed += usize::from(l != self.labels[i]);
+            self.labels[i] = l;
+        }
+        changed
+    }
+
     /// Clean-up (largest component, holes), don't-care band, bounding box and confidence.
     fn finish(&mut self) -> Result<(), SegmentError> {
         let (w, h) = (self.w, self.h);
         let n = w * h;
         let hard = &self.hard;
-        let mut obj = morph::largest_component(&self.labels, w, h, &|i| hard[i] == HARD_FG);
+        let mut obj = morph::largest_component(&self.labels, w, h, &|i| is_fg(hard[i]));
         // Fill holes unless they are real: a hole whose colours match the border background
         // (a handle's loop) or that the user marked as background stays open.
         let min_hole = (n / 4000).max(6);
         for hole in morph::holes(&obj, w, h) {
-            let marked = hole.iter().any(|&i| self.hard[i] == STROKE_BG);
+            let marked = hole
+                .iter()
+                .any(|&i| self.hard[i] == STROKE_BG || self.hard[i] == PAINT_BG);
             let bg_like = hole
                 .iter()
                 .filter(|&&i| self.border_nll[i] <= self.border_tau)
@@ -373,7 +507,9 @@ impl Session {
         let frac = area as f32 / n as f32;
         if frac < 0.002 {
             warnings.push(
-                "no distinct object found: the image looks like its border everywhere".to_owned(),
+                "no distinct object found: the whole image looks like its border \
+                 (a uniform image, or an object filling the frame)"
+                    .to_owned(),
             );
         } else if frac > 0.9 {
             warnings.push("the object seems to fill the whole frame".to_owned());

@@ -18,6 +18,17 @@
 //! [`Mask::DONT_CARE`] band along the outline (a couple of working pixels, where any
 //! segmentation is unsure), the bounding box and a confidence with human-readable warnings.
 //! Nothing here reads a clock: `std::time::Instant` panics on wasm32.
+//!
+//! What automatic mode can and cannot do (it models colour, not shape or meaning):
+//! - works when the object's colours differ from the background's and the image border shows
+//!   background (plain, gradient, noisy, patterned walls; a table along one side);
+//! - keeps holes that show the background (a handle's loop), fills others;
+//! - fails where object and background share colours (a white cup on a white table), takes a
+//!   cast shadow that is darker than anything on the border for object, and cannot see glass;
+//!   such masks usually come out with a low agreement between cut and colour models, which
+//!   [`Segmentation::warnings`] reports — the user then corrects with strokes or a rectangle.
+//! - A uniform image, or an object that fills the frame, leaves nothing to learn the
+//!   background from: the result is flagged ([`Segmentation::is_low_confidence`]).
 
 pub mod decode;
 pub mod gmm;
@@ -110,6 +121,16 @@ impl Segmentation {
     /// Whether the mask should be checked by the user before fitting.
     pub fn is_low_confidence(&self) -> bool {
         !self.warnings.is_empty() || self.confidence < 0.5
+    }
+}
+
+/// The default way: the photo's own alpha channel if it has transparency (its background was
+/// already removed), else automatic segmentation.
+pub fn segment(photo: &Photo) -> Result<Segmentation, SegmentError> {
+    if photo.has_alpha() {
+        segment_alpha(photo)
+    } else {
+        segment_auto(photo)
     }
 }
 
