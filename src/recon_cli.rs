@@ -28,7 +28,8 @@ pub struct ReconstructArgs {
     /// Quality/speed knob: multiplies every stage's budget.
     #[arg(long, default_value_t = 1.0)]
     quality: f64,
-    /// Vertical field of view of every image, radians (default: 0.47, a 50 mm lens).
+    /// Vertical field of view of every image, radians (default: from the photo's EXIF 35 mm
+    /// focal length, else 0.47, a 50 mm lens).
     #[arg(long)]
     fov: Option<f64>,
     /// Photos (segmented automatically) or mask images (white or opaque = object), one per
@@ -86,9 +87,28 @@ fn read(path: &Path) -> Result<Vec<u8>, String> {
     std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))
 }
 
+/// The vertical field of view from a photo's EXIF `FocalLengthIn35mmFilm`, for an image of
+/// `width × height` (after orientation), when the file has one.
+fn exif_fov(bytes: &[u8], width: u32, height: u32) -> Option<f64> {
+    use image::ImageDecoder;
+    let mut decoder = image::ImageReader::new(std::io::Cursor::new(bytes))
+        .with_guessed_format()
+        .ok()?
+        .into_decoder()
+        .ok()?;
+    let exif = decoder.exif_metadata().ok()??;
+    let focal = reconstruct::views::focal_35mm_from_exif(&exif)?;
+    reconstruct::fov_from_focal_35mm(focal, width, height)
+}
+
 /// A mask from an image file: a mask image when it is grey and nearly binary or has
 /// transparency, else a photo segmented automatically.
 fn load_mask(path: &Path) -> Result<Mask, String> {
+    Ok(load_view(path)?.0)
+}
+
+/// A view's mask and, for a photo with EXIF, its field of view.
+fn load_view(path: &Path) -> Result<(Mask, Option<f64>), String> {
     let bytes = read(path)?;
     let img = image::load_from_memory(&bytes)
         .map_err(|e| format!("{}: not a readable image ({e})", path.display()))?;
@@ -98,7 +118,8 @@ fn load_mask(path: &Path) -> Result<Mask, String> {
     let transparent = px.chunks_exact(4).any(|p| p[3] < 128);
     if transparent {
         let v = px.chunks_exact(4).map(|p| p[3]).collect::<Vec<_>>();
-        return Mask::from_luma8(w, h, &v).map_err(|e| format!("{}: {e}", path.display()));
+        let mask = Mask::from_luma8(w, h, &v).map_err(|e| format!("{}: {e}", path.display()))?;
+        return Ok((mask, exif_fov(&bytes, w, h)));
     }
     let grey = px.chunks_exact(4).all(|p| p[0] == p[1] && p[1] == p[2]);
     let binary = px
@@ -108,7 +129,8 @@ fn load_mask(path: &Path) -> Result<Mask, String> {
         >= px.len() / 4 * 95 / 100;
     if grey && binary {
         let v = px.chunks_exact(4).map(|p| p[0]).collect::<Vec<_>>();
-        return Mask::from_luma8(w, h, &v).map_err(|e| format!("{}: {e}", path.display()));
+        let mask = Mask::from_luma8(w, h, &v).map_err(|e| format!("{}: {e}", path.display()))?;
+        return Ok((mask, exif_fov(&bytes, w, h)));
     }
     let photo = Photo::decode(&bytes, segment::WORKING_SIDE)
         .map_err(|e| format!("{}: {e}", path.display()))?;
@@ -116,7 +138,8 @@ fn load_mask(path: &Path) -> Result<Mask, String> {
     for w in &seg.warnings {
         eprintln!("procfit: {}: {w}", path.display());
     }
-    Ok(seg.mask)
+    let fov = exif_fov(&bytes, seg.mask.width(), seg.mask.height());
+    Ok((seg.mask, fov))
 }
 
 fn seconds(s: f64) -> String {
@@ -129,17 +152,20 @@ fn seconds(s: f64) -> String {
 
 /// `procfit reconstruct`: fit, progress on stderr, GLB (and params JSON) out.
 pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
-    let masks = a
+    let views = a
         .images
         .iter()
-        .map(|p| load_mask(p))
+        .map(|p| load_view(p))
         .collect::<Result<Vec<_>, _>>()?;
+    // --fov wins, then the photo's EXIF focal length, then the default.
+    let fov_y = views.iter().map(|v| a.fov.or(v.1)).collect();
+    let masks = views.into_iter().map(|v| v.0).collect::<Vec<_>>();
     let config = FitConfig {
         generator: a.generator.clone(),
         seed: a.seed,
         quality: a.quality,
         budget: a.budget,
-        fov_y: vec![a.fov; masks.len()],
+        fov_y,
         ..FitConfig::default()
     };
     let mut session = Session::new(config, masks).map_err(|e| e.to_string())?;

@@ -360,3 +360,33 @@ fn bad_setups_are_refused() {
     assert!(Domain::new(vec![Var::continuous(0.0, f64::INFINITY)]).is_err());
     assert!(Domain::new(vec![Var::discrete(0.2, 0.8)]).is_err());
 }
+
+#[test]
+fn memetic_restarts_when_the_population_collapses() {
+    // A smooth bowl pulls every individual to one point; with a diversity floor the run must
+    // restart (keeping its elite) and still solve the continuous part (the discrete needles of
+    // `mixed` from an all-zero seed are luck, not the point here).
+    let config = MemeticConfig {
+        max_evaluations: 3000,
+        min_diversity: 0.02,
+        seed: 2,
+        ..MemeticConfig::default()
+    };
+    let mut m = Memetic::new(mixed_domain(), &[vec![0.0; 7]], config).unwrap();
+    let best = m.run(&with_grad(mixed)).unwrap().clone();
+    assert!(m.status().restarts > 0, "no restart: {:?}", m.status());
+    let continuous: f64 = (0..4).map(|i| (best.x[i] - CONT_TARGET[i]).powi(2)).sum();
+    assert!(continuous < 1e-3, "best {:?}", best);
+    // Without the floor it does not restart.
+    let mut calm = Memetic::new(
+        mixed_domain(),
+        &[vec![0.0; 7]],
+        MemeticConfig {
+            min_diversity: 0.0,
+            ..config
+        },
+    )
+    .unwrap();
+    calm.run(&with_grad(mixed));
+    assert_eq!(calm.status().restarts, 0);
+}

@@ -148,3 +148,61 @@ fn mask_statistics_and_handle_side() {
     let s = mask_stats(&procfit::mask::Mask::new(w, h, flipped).unwrap(), 0).unwrap();
     assert_eq!(s.handle_yaw(), std::f64::consts::PI);
 }
+
+/// A minimal EXIF block: IFD0 with an Exif-IFD pointer, the Exif IFD with
+/// FocalLengthIn35mmFilm (SHORT) = `focal`.
+fn exif_block(big_endian: bool, focal: u16) -> Vec<u8> {
+    let u16b = |v: u16| {
+        if big_endian {
+            v.to_be_bytes()
+        } else {
+            v.to_le_bytes()
+        }
+    };
+    let u32b = |v: u32| {
+        if big_endian {
+            v.to_be_bytes()
+        } else {
+            v.to_le_bytes()
+        }
+    };
+    let mut b = Vec::new();
+    b.extend_from_slice(if big_endian { b"MM" } else { b"II" });
+    b.extend_from_slice(&u16b(42));
+    b.extend_from_slice(&u32b(8));
+    // IFD0 at 8: one entry, ExifIFDPointer (LONG) → 26.
+    b.extend_from_slice(&u16b(1));
+    b.extend_from_slice(&u16b(0x8769));
+    b.extend_from_slice(&u16b(4));
+    b.extend_from_slice(&u32b(1));
+    b.extend_from_slice(&u32b(26));
+    b.extend_from_slice(&u32b(0));
+    // Exif IFD at 26: FocalLengthIn35mmFilm (SHORT).
+    b.extend_from_slice(&u16b(1));
+    b.extend_from_slice(&u16b(0xA405));
+    b.extend_from_slice(&u16b(3));
+    b.extend_from_slice(&u32b(1));
+    b.extend_from_slice(&u16b(focal));
+    b.extend_from_slice(&[0, 0]);
+    b.extend_from_slice(&u32b(0));
+    b
+}
+
+#[test]
+fn focal_length_from_exif_blocks() {
+    use procfit::reconstruct::views::focal_35mm_from_exif;
+    assert_eq!(focal_35mm_from_exif(&exif_block(false, 26)), Some(26.0));
+    assert_eq!(focal_35mm_from_exif(&exif_block(true, 50)), Some(50.0));
+    let mut prefixed = b"Exif\0\0".to_vec();
+    prefixed.extend(exif_block(false, 28));
+    assert_eq!(focal_35mm_from_exif(&prefixed), Some(28.0));
+    // Unknown (0), truncated at every length, garbage: no value and no panic.
+    assert_eq!(focal_35mm_from_exif(&exif_block(false, 0)), None);
+    // The value ends at byte 38 (Exif IFD at 26, count, tag, type, count, value).
+    let full = exif_block(true, 50);
+    for n in 0..38 {
+        assert_eq!(focal_35mm_from_exif(&full[..n]), None, "truncated at {n}");
+    }
+    assert_eq!(focal_35mm_from_exif(&full[..38]), Some(50.0));
+    assert_eq!(focal_35mm_from_exif(b"garbage bytes here"), None);
+}

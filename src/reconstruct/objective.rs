@@ -9,7 +9,8 @@
 //! **Scratch buffers.** An evaluation needs a [`Renderer`] per image size, an adjoint image and
 //! a vertex-gradient buffer. Evaluations run on rayon's threads, so each thread keeps its own
 //! in a thread-local slot and reuses them on every call (the caller-allocates rule, with the
-//! thread as the caller). Edge structures ([`Topology`]) depend only on the discrete parameters
+//! thread as the caller). A nested evaluation on the same thread (rayon work stealing inside a
+//! parallel render) finds the slot busy and allocates its own. Edge structures ([`Topology`]) depend only on the discrete parameters
 //! and the level of detail, so they are cached per combination, shared between threads.
 
 use super::views::ViewVars;
@@ -245,8 +246,14 @@ impl FitObjective {
         let mut loss = 0.0;
         let mut grad = grad;
         SCRATCH.with(|cell| -> Result<(), String> {
-            let mut scratch = cell.borrow_mut();
-            let scratch = &mut *scratch;
+            // A render that uses rayon may, while it waits, run another evaluation on this very
+            // thread (work stealing); that one finds the slot taken and uses its own buffers.
+            let mut own = None;
+            let mut borrowed = cell.try_borrow_mut().ok();
+            let scratch: &mut Scratch = match borrowed.as_deref_mut() {
+                Some(s) => s,
+                None => own.insert(Scratch::default()),
+            };
             scratch.adjoint.resize(w as usize * h as usize, 0.0);
             scratch.grad_pos.clear();
             scratch.grad_pos.resize(mesh.positions.len(), Vec3::ZERO);

@@ -662,7 +662,7 @@ const PROBE_ITERATIONS: usize = 12;
 /// The hand-over from stage 1 to stage 2. At 128² and coarse detail a wrong basin (another
 /// camera elevation with a compensating shape) can score a hair better than the right one, so
 /// the best few distinct individuals are each simplified ([`simplify`]) and given a short Adam
-/// run at stage 2's resolution, in parallel; the best goes on. Returns it and the evaluations
+/// run at stage 2's resolution; the best goes on. Returns it and the evaluations
 /// spent.
 fn probe(
     objective: &FitObjective,
@@ -670,14 +670,15 @@ fn probe(
     specs: &[crate::generators::ParamSpec],
     starts: Vec<Vec<f64>>,
 ) -> (Vec<f64>, usize) {
-    use rayon::prelude::*;
     let adam = AdamConfig {
         iterations: PROBE_ITERATIONS,
         lr: 0.01,
         ..AdamConfig::default()
     };
+    // Sequential: each evaluation already renders in parallel, and nesting the two would let
+    // rayon interleave evaluations on one thread.
     let results: Vec<(Vec<f64>, f64, usize)> = starts
-        .into_par_iter()
+        .into_iter()
         .map(|mut x| {
             let spent = simplify(objective, specs, &mut x);
             let (ind, evals) = crate::optim::adam_search(objective, domain, &x, &adam);

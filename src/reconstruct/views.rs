@@ -65,6 +65,51 @@ pub fn fov_from_focal_35mm(focal_35mm: f64, width: u32, height: u32) -> Option<f
     Some(2.0 * (tan_half_diag * h / w.hypot(h)).atan())
 }
 
+/// `FocalLengthIn35mmFilm` (EXIF tag 0xA405) from a raw EXIF block (a TIFF header and IFDs, as
+/// image decoders return it; a leading `Exif\0\0` is skipped). `None` when the block is
+/// malformed, has no such tag, or the value is 0 (unknown). Every offset is bounds-checked.
+pub fn focal_35mm_from_exif(exif: &[u8]) -> Option<f64> {
+    let t = exif.strip_prefix(b"Exif\0\0").unwrap_or(exif);
+    let le = match t.get(..2)? {
+        b"II" => true,
+        b"MM" => false,
+        _ => return None,
+    };
+    let u16_at = |o: usize| -> Option<u16> {
+        let b: [u8; 2] = t.get(o..o + 2)?.try_into().ok()?;
+        Some(if le {
+            u16::from_le_bytes(b)
+        } else {
+            u16::from_be_bytes(b)
+        })
+    };
+    let u32_at = |o: usize| -> Option<u32> {
+        let b: [u8; 4] = t.get(o..o + 4)?.try_into().ok()?;
+        Some(if le {
+            u32::from_le_bytes(b)
+        } else {
+            u32::from_be_bytes(b)
+        })
+    };
+    // Finds `tag` in the IFD at `ifd` and returns the offset of its 12-byte entry.
+    let find = |ifd: usize, tag: u16| -> Option<usize> {
+        let n = usize::from(u16_at(ifd)?);
+        (0..n.min(512))
+            .map(|i| ifd + 2 + 12 * i)
+            .find(|&e| u16_at(e) == Some(tag))
+    };
+    let ifd0 = u32_at(4)? as usize;
+    let exif_ifd = u32_at(find(ifd0, 0x8769)? + 8)? as usize;
+    let entry = find(exif_ifd, 0xA405)?;
+    // Type SHORT (3), count 1: the value sits in the first two bytes of the value field.
+    let value = match u16_at(entry + 2)? {
+        3 => f64::from(u16_at(entry + 8)?),
+        4 => f64::from(u32_at(entry + 8)?),
+        _ => return None,
+    };
+    (value > 0.0).then_some(value)
+}
+
 /// The fixed camera pose of every view.
 pub fn camera_pose() -> CameraPose {
     // Cannot fail: eye and target differ and Y is not along the viewing direction.
