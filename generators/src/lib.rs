@@ -25,6 +25,7 @@ pub mod ad;
 pub mod build;
 pub mod building;
 pub mod dish;
+pub mod rng;
 pub mod tree;
 
 /// Level of detail, from the coarse mesh used during the fit to the export mesh.

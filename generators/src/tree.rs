@@ -13,6 +13,7 @@
 //! double-sided cards (four welded corners, two triangles a side, back side wound the other
 //! way). Parts: `trunk`, `branch`, `leaf`.
 
+use crate::rng::SplitMix64 as Rng;
 use crate::{GenError, Generator, Lod, Mesh, ParamKind, ParamSpec, Part, Preset, sanitize_params};
 use glam::{Quat, Vec2, Vec3};
 use std::f32::consts::{PI, TAU};
@@ -350,27 +351,6 @@ fn detail(lod: Lod) -> Detail {
     }
 }
 
-/// Small deterministic RNG (SplitMix64): the generator must not depend on a crate's stream.
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in `[0, 1)`.
-    fn unit(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
-    }
-    /// Uniform in `[-1, 1)`.
-    fn sym(&mut self) -> f32 {
-        2.0 * self.unit() - 1.0
-    }
-}
-
 /// One stem (trunk piece or branch) of the skeleton: a polyline with a radius per point.
 #[derive(Clone, Debug)]
 pub struct Stem {
@@ -650,7 +630,7 @@ impl Builder<'_> {
     fn trunk(&mut self) -> Vec<usize> {
         let p = self.p;
         let h = p.height;
-        let lean = self.rng.sym() * 0.05 * p.jitter;
+        let lean = self.rng.sym_f32() * 0.05 * p.jitter;
         let dir = Quat::from_rotation_z(lean) * Vec3::Y;
         let axis = Vec3::Z;
         let mut pieces = Vec::new();
@@ -689,14 +669,14 @@ impl Builder<'_> {
             )
         };
         let n = p.splits + 1;
-        let phase = self.rng.unit() * TAU;
+        let phase = self.rng.unit_f32() * TAU;
         let side = any_perp(tdir);
         // Split pieces share the cross-section (area kept), so each is thinner.
         let r_piece = r / (n as f32).sqrt() * 1.2;
         for k in 0..n {
             let around = Quat::from_axis_angle(tdir, phase + TAU * k as f32 / n as f32);
             let tilt_axis = around * side;
-            let angle = p.split_angle * (1.0 + 0.2 * p.jitter * self.rng.sym());
+            let angle = p.split_angle * (1.0 + 0.2 * p.jitter * self.rng.sym_f32());
             let d = Quat::from_axis_angle(tilt_axis, angle) * tdir;
             // Split trunks bend back towards the vertical, like real forks.
             if let Some(i) = self.add_stem(0, top, d, tilt_axis, h - l0, r_piece, -0.6 * angle) {
@@ -713,10 +693,10 @@ impl Builder<'_> {
         }
         let l = level - 1;
         let p = self.p;
-        let n = (count + self.rng.unit() * 0.999).floor() as usize;
+        let n = (count + self.rng.unit_f32() * 0.999).floor() as usize;
         let parent_len = self.sk.stems[parent].length;
         let parent_radius = self.sk.stems[parent].radii[0];
-        let mut rot = self.rng.unit() * TAU;
+        let mut rot = self.rng.unit_f32() * TAU;
         for k in 0..n {
             let t = along.0 + (along.1 - along.0) * ((k as f32 + 0.5) / n as f32);
             let (pos, pdir, prad) = sample_stem(&self.sk.stems[parent], t);
@@ -730,16 +710,16 @@ impl Builder<'_> {
             } else {
                 p.length[l] * (parent_len - 0.6 * offset).max(0.0)
             };
-            let len = max_len * (1.0 + 0.3 * p.jitter * self.rng.sym());
-            rot += p.rotate[l] + 0.35 * p.jitter * self.rng.sym();
-            let down = p.down_angle[l] + 0.35 * p.jitter * self.rng.sym();
+            let len = max_len * (1.0 + 0.3 * p.jitter * self.rng.sym_f32());
+            rot += p.rotate[l] + 0.35 * p.jitter * self.rng.sym_f32();
+            let down = p.down_angle[l] + 0.35 * p.jitter * self.rng.sym_f32();
             let side = any_perp(pdir);
             let around = Quat::from_axis_angle(pdir, rot) * side;
             let dir = Quat::from_axis_angle(around, down) * pdir;
             let axis = dir.cross(Vec3::Y).normalize_or(around);
             let ratio = (len / parent_len.max(1e-6)).clamp(0.0, 1.0);
             let radius = (parent_radius * ratio.powf(p.ratio_power)).min(prad * 0.9);
-            let curve = p.curve[l] * (1.0 + 0.3 * p.jitter * self.rng.sym());
+            let curve = p.curve[l] * (1.0 + 0.3 * p.jitter * self.rng.sym_f32());
             let Some(child) =
                 self.add_stem(level as u8, pos, dir, axis, len, radius.max(1e-4), curve)
             else {
@@ -764,17 +744,17 @@ impl Builder<'_> {
         let n = p.leaves.div_ceil(merge);
         // Leaves draw from their own stream, seeded by one draw of the tree's: the number of
         // cards depends on the LOD, and it must not shift the random choices of the branches.
-        let mut rng = Rng(self.rng.next_u64());
+        let mut rng = Rng::from_state(self.rng.next_u64());
         for k in 0..n {
             if self.sk.leaves.len() >= self.d.max_leaves {
                 return;
             }
-            let t = 0.15 + 0.85 * (k as f32 + rng.unit()) / n as f32;
+            let t = 0.15 + 0.85 * (k as f32 + rng.unit_f32()) / n as f32;
             let (pos, dir, _) = sample_stem(&self.sk.stems[stem], t);
             let side = any_perp(dir);
-            let around = Quat::from_axis_angle(dir, rng.unit() * TAU) * side;
-            let ldir =
-                (Quat::from_axis_angle(around, 0.6 + 0.4 * rng.sym()) * dir).normalize_or(Vec3::Y);
+            let around = Quat::from_axis_angle(dir, rng.unit_f32() * TAU) * side;
+            let ldir = (Quat::from_axis_angle(around, 0.6 + 0.4 * rng.sym_f32()) * dir)
+                .normalize_or(Vec3::Y);
             let normal = ldir.cross(around).normalize_or(Vec3::Z);
             self.sk.leaves.push((pos, ldir, normal));
         }
@@ -790,7 +770,7 @@ fn build_skeleton(params: &[f64], lod: Lod) -> Skeleton {
     let mut b = Builder {
         p: &p,
         d,
-        rng: Rng(seed),
+        rng: Rng::from_state(seed),
         sk: Skeleton::default(),
         crown: (crown_lo, p.height),
     };

@@ -56,7 +56,7 @@ fn every_preset_and_lod_gives_a_valid_mesh() {
 
 #[test]
 fn random_in_range_parameters_give_valid_meshes() {
-    let mut rng = Rng(77);
+    let mut rng = Rng::new(77);
     for case in 0..300 {
         let p = random_params(&Building, &mut rng);
         let lod = Lod::ALL[case % 4];

@@ -38,7 +38,7 @@ fn every_preset_and_lod_gives_a_valid_mesh() {
 
 #[test]
 fn random_in_range_parameters_give_valid_meshes() {
-    let mut rng = Rng(2024);
+    let mut rng = Rng::new(2024);
     for case in 0..300 {
         let p = random_params(&Dish, &mut rng);
         let lod = if case % 10 == 0 {
@@ -409,7 +409,7 @@ fn seeds_are_bodies_times_handles_plus_handleless() {
 
 #[test]
 fn regularizer_gradient_matches_finite_differences() {
-    let mut rng = Rng(11);
+    let mut rng = Rng::new(11);
     for _ in 0..20 {
         let mut p = random_params(&Dish, &mut rng);
         p[dish::P_HAS_HANDLE] = 1.0;

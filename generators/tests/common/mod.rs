@@ -9,25 +9,22 @@
 
 use glam::{DVec3, Vec3};
 use procfit_generators::build::Model;
+use procfit_generators::rng::SplitMix64;
 use procfit_generators::{Generator, Lod, Mesh};
 use std::collections::HashMap;
 
-/// A tiny deterministic generator (SplitMix64), so the tests need no dependency.
-pub struct Rng(pub u64);
+/// The library's SplitMix64 with the one draw the tests add: uniform in `[lo, hi]`.
+pub struct Rng(SplitMix64);
 
 impl Rng {
-    /// Next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
+    /// A stream from this raw state.
+    pub fn new(state: u64) -> Rng {
+        Rng(SplitMix64::from_state(state))
     }
 
     /// Uniform in [0, 1).
     pub fn unit(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+        self.0.unit_f64()
     }
 
     /// Uniform in [lo, hi].
@@ -146,7 +143,7 @@ pub fn validate(m: &Mesh) -> Result<(), String> {
 /// Fixed random weights, one vector per vertex: the scalar of the gradient check is
 /// `Σ_v w_v · position_v`.
 pub fn weights(n: usize, seed: u64) -> Vec<Vec3> {
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed);
     (0..n)
         .map(|_| {
             Vec3::new(
