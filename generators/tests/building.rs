@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{Rng, check_gradient, random_params, validate};
+use common::{Rng, check_gradient, check_summary, random_params, validate};
 use procfit_generators::building::{Building, idx};
 use procfit_generators::{GenError, Generator, Lod};
 
@@ -120,20 +120,7 @@ fn every_part_appears_at_ultra() {
 
 /// Vertex count, triangle count and bounding box (min, max) of a preset at a level.
 fn check(preset: &str, lod: Lod, verts: usize, tris: usize, lo: [f32; 3], hi: [f32; 3]) {
-    let p = Building.preset(preset).expect("preset").values;
-    let m = Building.generate(&p, lod).expect("generate");
-    let (blo, bhi) = m.bounds().expect("bounds");
-    let got = (
-        m.positions.len(),
-        m.triangles.len(),
-        blo.to_array(),
-        bhi.to_array(),
-    );
-    let close = |a: [f32; 3], b: [f32; 3]| a.iter().zip(&b).all(|(x, y)| (x - y).abs() < 1e-3);
-    assert!(
-        got.0 == verts && got.1 == tris && close(got.2, lo) && close(got.3, hi),
-        "{preset} {lod:?}: got {got:?}"
-    );
+    check_summary(&Building, preset, lod, 1e-3, verts, tris, lo, hi);
 }
 
 #[test]

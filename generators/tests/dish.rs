@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{Rng, check_gradient, random_params, validate};
+use common::{Rng, check_gradient, check_summary, random_params, validate};
 use procfit_generators::dish::{self, Dish};
 use procfit_generators::{GenError, Generator, Lod};
 
@@ -55,20 +55,7 @@ fn random_in_range_parameters_give_valid_meshes() {
 
 /// Vertex count, triangle count and bounding box (min, max) of a preset at a level.
 fn check(preset: &str, lod: Lod, verts: usize, tris: usize, lo: [f32; 3], hi: [f32; 3]) {
-    let p = Dish.preset(preset).expect("preset").values;
-    let m = Dish.generate(&p, lod).expect("generate");
-    let (blo, bhi) = m.bounds().expect("bounds");
-    let got = (
-        m.positions.len(),
-        m.triangles.len(),
-        blo.to_array(),
-        bhi.to_array(),
-    );
-    let close = |a: [f32; 3], b: [f32; 3]| a.iter().zip(&b).all(|(x, y)| (x - y).abs() < 1e-4);
-    assert!(
-        got.0 == verts && got.1 == tris && close(got.2, lo) && close(got.3, hi),
-        "{preset} {lod:?}: got {got:?}"
-    );
+    check_summary(&Dish, preset, lod, 1e-4, verts, tris, lo, hi);
 }
 
 #[test]

@@ -215,3 +215,35 @@ pub fn check_gradient<M: Model + Generator>(m: &M, params: &[f64], lod: Lod, wha
     }
     moving
 }
+
+/// Golden summary of a preset at a level: vertex count, triangle count and bounding box (min,
+/// max) within `tol`. A surprise here is a regression; regenerate only for an intended change.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "one flat, data-driven golden case per call"
+)]
+pub fn check_summary(
+    g: &dyn Generator,
+    preset: &str,
+    lod: Lod,
+    tol: f32,
+    verts: usize,
+    tris: usize,
+    lo: [f32; 3],
+    hi: [f32; 3],
+) {
+    let p = g.preset(preset).expect("preset").values;
+    let m = g.generate(&p, lod).expect("generate");
+    let (blo, bhi) = m.bounds().expect("bounds");
+    let got = (
+        m.positions.len(),
+        m.triangles.len(),
+        blo.to_array(),
+        bhi.to_array(),
+    );
+    let close = |a: [f32; 3], b: [f32; 3]| a.iter().zip(&b).all(|(x, y)| (x - y).abs() < tol);
+    assert!(
+        got.0 == verts && got.1 == tris && close(got.2, lo) && close(got.3, hi),
+        "{preset} {lod:?}: got {got:?}"
+    );
+}
