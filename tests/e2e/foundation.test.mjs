@@ -3,25 +3,20 @@
 // and nothing is requested from outside the page's origin.
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
-import { startServer, launchBrowser, openPage, screenshot } from './harness.mjs';
+import { openReadyPage, waitReady, screenshot } from './harness.mjs';
 
+let ctx;
 let server;
-let browser;
 let page;
 let log;
 
 before(async () => {
-  server = await startServer();
-  browser = await launchBrowser();
-  ({ page, log } = await openPage(browser.context, server.url));
-  await page.waitForFunction(() => document.getElementById('status').dataset.state === 'ready', null, {
-    timeout: 60000,
-  });
+  ctx = await openReadyPage();
+  ({ server, page, log } = ctx);
 });
 
 after(async () => {
-  await browser?.close();
-  server?.stop();
+  await ctx?.close();
 });
 
 test('the page says ready with the thread count', async () => {
@@ -66,9 +61,7 @@ test('a panic in wasm becomes an error message and the worker comes back', async
   assert.ok(err, 'debugPanic resolved instead of failing');
   assert.equal(err.panic, true);
   assert.match(err.message, /deliberate panic/);
-  await page.waitForFunction(() => document.getElementById('status').dataset.state === 'ready', null, {
-    timeout: 60000,
-  });
+  await waitReady(page);
   const info = await page.evaluate(() => window.procfit.client.call(window.procfit.REQUESTS.PING));
   assert.equal(info.threaded, true);
   // The panic is logged on purpose; forget it so the clean-console check sees only surprises.

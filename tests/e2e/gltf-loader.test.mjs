@@ -4,25 +4,20 @@
 // state in the scene's extras (issue 7).
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
-import { startServer, launchBrowser, openPage } from './harness.mjs';
+import { openReadyPage } from './harness.mjs';
 
+let ctx;
 let server;
-let browser;
 let page;
 let log;
 
 before(async () => {
-  server = await startServer();
-  browser = await launchBrowser();
-  ({ page, log } = await openPage(browser.context, server.url));
-  await page.waitForFunction(() => document.getElementById('status').dataset.state === 'ready', null, {
-    timeout: 60000,
-  });
+  ctx = await openReadyPage();
+  ({ server, page, log } = ctx);
 });
 
 after(async () => {
-  await browser?.close();
-  server?.stop();
+  await ctx?.close();
 });
 
 // Two cameras as a fit gives them: yfov, aspect, then a column-major camera-to-world matrix.

@@ -71,6 +71,32 @@ export async function openPage(context, url) {
   return { page, log };
 }
 
+/** Waits until the page's worker says ready (the status line's state). */
+export async function waitReady(page, timeout = 60000) {
+  await page.waitForFunction(() => document.getElementById('status').dataset.state === 'ready', null, { timeout });
+}
+
+/**
+ * Serves the repository, launches Chromium and opens the page until its worker is ready:
+ * resolves with { server, browser, page, log, close }.
+ */
+export async function openReadyPage(path = '') {
+  const server = await startServer();
+  const browser = await launchBrowser();
+  const { page, log } = await openPage(browser.context, server.url + path);
+  await waitReady(page);
+  return {
+    server,
+    browser,
+    page,
+    log,
+    close: async () => {
+      await browser.close();
+      server.stop();
+    },
+  };
+}
+
 /** Saves a screenshot under test-artifacts/ (kept by CI runs for people to look at). */
 export async function screenshot(page, name) {
   mkdirSync(ARTIFACTS, { recursive: true });
