@@ -240,15 +240,7 @@ fn generate(
 fn tree_stats(out: Option<&std::path::Path>) -> Result<(), String> {
     let stats = procfit::tree::mutation::tree_stats().map_err(|e| e.to_string())?;
     let text = stats.to_json() + "\n";
-    match out {
-        Some(path) => {
-            std::fs::write(path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))
-        }
-        None => {
-            print!("{text}");
-            Ok(())
-        }
-    }
+    write_or_print(out, &text)
 }
 
 fn tree_fit(
@@ -295,6 +287,11 @@ fn tree_fit(
             .map_err(|e| e.to_string())?;
     model.seed = Some(seed);
     let text = model.to_json() + "\n";
+    write_or_print(out, &text)
+}
+
+/// Writes `text` to `out`, or to stdout when no path is given.
+fn write_or_print(out: Option<&std::path::Path>, text: &str) -> Result<(), String> {
     match out {
         Some(path) => {
             std::fs::write(path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))

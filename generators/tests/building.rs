@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{Rng, check_gradient, check_summary, random_params, validate};
+use common::{Rng, check_gradient, check_range_corners, check_summary, random_params, validate};
 use procfit_generators::building::{Building, idx};
 use procfit_generators::{GenError, Generator, Lod};
 
@@ -435,26 +435,5 @@ fn buildings_are_flat_shaded() {
 
 #[test]
 fn range_corners_give_valid_meshes() {
-    // Every parameter at its minimum, at its maximum, and alternating, at every level.
-    let spec = Building.params();
-    let corners = [
-        spec.iter().map(|s| s.min).collect::<Vec<_>>(),
-        spec.iter().map(|s| s.max).collect(),
-        spec.iter()
-            .enumerate()
-            .map(|(i, s)| if i % 2 == 0 { s.min } else { s.max })
-            .collect(),
-        spec.iter()
-            .enumerate()
-            .map(|(i, s)| if i % 2 == 1 { s.min } else { s.max })
-            .collect(),
-    ];
-    for (c, p) in corners.iter().enumerate() {
-        for lod in Lod::ALL {
-            let m = Building.generate(p, lod).expect("generate");
-            if let Err(e) = validate(&m) {
-                panic!("corner {c} {lod:?}: {e}");
-            }
-        }
-    }
+    check_range_corners(&Building);
 }

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{Rng, check_gradient, check_summary, random_params, validate};
+use common::{Rng, check_gradient, check_range_corners, check_summary, random_params, validate};
 use procfit_generators::dish::{self, Dish};
 use procfit_generators::{GenError, Generator, Lod};
 
@@ -576,26 +576,5 @@ fn mug_body_is_smooth_shaded_and_caps_are_flat() {
 
 #[test]
 fn range_corners_give_valid_meshes() {
-    // Every parameter at its minimum, at its maximum, and alternating, at every level.
-    let spec = Dish.params();
-    let corners = [
-        spec.iter().map(|s| s.min).collect::<Vec<_>>(),
-        spec.iter().map(|s| s.max).collect(),
-        spec.iter()
-            .enumerate()
-            .map(|(i, s)| if i % 2 == 0 { s.min } else { s.max })
-            .collect(),
-        spec.iter()
-            .enumerate()
-            .map(|(i, s)| if i % 2 == 1 { s.min } else { s.max })
-            .collect(),
-    ];
-    for (c, p) in corners.iter().enumerate() {
-        for lod in Lod::ALL {
-            let m = Dish.generate(p, lod).expect("generate");
-            if let Err(e) = validate(&m) {
-                panic!("corner {c} {lod:?}: {e}");
-            }
-        }
-    }
+    check_range_corners(&Dish);
 }

@@ -247,3 +247,29 @@ pub fn check_summary(
         "{preset} {lod:?}: got {got:?}"
     );
 }
+
+/// Every parameter at its minimum, at its maximum, and alternating both ways, at every level:
+/// each must give a valid mesh.
+pub fn check_range_corners(g: &dyn Generator) {
+    let spec = g.params();
+    let corners = [
+        spec.iter().map(|s| s.min).collect::<Vec<_>>(),
+        spec.iter().map(|s| s.max).collect(),
+        spec.iter()
+            .enumerate()
+            .map(|(i, s)| if i % 2 == 0 { s.min } else { s.max })
+            .collect(),
+        spec.iter()
+            .enumerate()
+            .map(|(i, s)| if i % 2 == 1 { s.min } else { s.max })
+            .collect(),
+    ];
+    for (c, p) in corners.iter().enumerate() {
+        for lod in Lod::ALL {
+            let m = g.generate(p, lod).expect("generate");
+            if let Err(e) = validate(&m) {
+                panic!("{} corner {c} {lod:?}: {e}", g.name());
+            }
+        }
+    }
+}
