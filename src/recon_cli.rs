@@ -90,14 +90,7 @@ fn read(path: &Path) -> Result<Vec<u8>, String> {
 /// The vertical field of view from a photo's EXIF `FocalLengthIn35mmFilm`, for an image of
 /// `width × height` (after orientation), when the file has one.
 fn exif_fov(bytes: &[u8], width: u32, height: u32) -> Option<f64> {
-    use image::ImageDecoder;
-    let mut decoder = image::ImageReader::new(std::io::Cursor::new(bytes))
-        .with_guessed_format()
-        .ok()?
-        .into_decoder()
-        .ok()?;
-    let exif = decoder.exif_metadata().ok()??;
-    let focal = reconstruct::views::focal_35mm_from_exif(&exif)?;
+    let focal = reconstruct::views::focal_35mm_from_file(bytes)?;
     reconstruct::fov_from_focal_35mm(focal, width, height)
 }
 

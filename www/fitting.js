@@ -24,14 +24,15 @@ export class FitRunner extends EventTarget {
   }
 
   /**
-   * Fits `generator` ('auto' or a name) to `photos` (each with a mask). Resolves with
+   * Fits `generator` ('auto' or a name) to `photos` (each with a mask), from the parameters
+   * `start` when given (a named generator's; "Refit from here"). Resolves with
    * { cancelled, result, seconds }; rejects with a readable error.
    */
-  async run({ generator, photos, quality }) {
+  async run({ generator, photos, quality, start = null }) {
     if (this.running) throw new Error('a fit is already running');
     const masks = photos.map((p) => {
       const codes = fitCodes(p);
-      return { width: p.mask.width, height: p.mask.height, codes: codes.buffer };
+      return { width: p.mask.width, height: p.mask.height, codes: codes.buffer, focal_35mm: p.focal35mm ?? null };
     });
     const fitId = nextFit++;
     const t0 = performance.now();
@@ -47,7 +48,7 @@ export class FitRunner extends EventTarget {
     try {
       const out = await this.client.call(
         REQUESTS.FIT_RUN,
-        { fitId, generator, seed: 1, quality, masks },
+        { fitId, generator, seed: 1, quality, masks, ...(start ? { start } : {}) },
         { transfer: masks.map((m) => m.codes), onEvent: (event, data) => event === 'progress' && this.progress(data, t0) },
       );
       return { ...out, seconds: (performance.now() - t0) / 1000 };

@@ -68,12 +68,25 @@ async function addFiles(files, source = 'file') {
       continue;
     }
     try {
-      addPhoto(await loadPhoto(file, file.name || `pasted ${state.photos.length + 1}.png`));
+      addPhoto(await photoOf(file, file.name || `pasted ${state.photos.length + 1}.png`));
     } catch (err) {
       problems.push(err.message);
     }
   }
   if (problems.length) say(photosMessage, problems.join(' '));
+}
+
+/** A photo from `file`, with the EXIF focal length of the original file (downscaling drops it). */
+async function photoOf(file, name) {
+  const photo = await loadPhoto(file, name);
+  photo.focal35mm = null;
+  try {
+    const bytes = await file.arrayBuffer();
+    photo.focal35mm = (await client.call(REQUESTS.PHOTO_FOCAL, { bytes }, { transfer: [bytes] })).focal_35mm;
+  } catch {
+    // No focal length: the fit uses its default field of view, as for a photo without EXIF.
+  }
+  return photo;
 }
 
 function addPhoto(photo) {
@@ -253,7 +266,7 @@ function renderPhotos() {
   canvas.getContext('2d').drawImage(photo.bitmap, 0, 0);
   // Portrait photos stay within the screen's height; the mask overlay follows the photo.
   document.querySelector('#photo-view .stack').style.maxWidth = `calc(75vh * ${photo.width / photo.height})`;
-  $('photo-caption').textContent = `${photo.name} — ${photo.width}×${photo.height} px${state.photos.length > 1 ? ` · photo ${state.photos.indexOf(photo) + 1} of ${state.photos.length}` : ''}`;
+  $('photo-caption').textContent = `${photo.name} — ${photo.width}×${photo.height} px${photo.focal35mm ? ` · fov from EXIF: ${Math.round(photo.focal35mm)} mm` : ''}${state.photos.length > 1 ? ` · photo ${state.photos.indexOf(photo) + 1} of ${state.photos.length}` : ''}`;
 }
 
 $('file').addEventListener('change', async (e) => {
@@ -297,7 +310,7 @@ window.addEventListener('paste', (e) => {
 const camera = new CameraCapture({
   onShot: async (blob, name) => {
     try {
-      addPhoto(await loadPhoto(blob, name));
+      addPhoto(await photoOf(blob, name));
     } catch (err) {
       say(photosMessage, err.message);
     }
@@ -359,7 +372,7 @@ async function openSample(s) {
   try {
     const res = await fetch(`www/samples/${s.file}`);
     if (!res.ok) throw new Error(`the sample is missing (${res.status})`);
-    addPhoto(await loadPhoto(await res.blob(), s.file));
+    addPhoto(await photoOf(await res.blob(), s.file));
     if (state.specs.some((g) => g.name === s.generator)) chooseGenerator(s.generator);
   } catch (err) {
     say(photosMessage, `Could not open the sample: ${err.message}`);
@@ -416,6 +429,7 @@ function chooseGenerator(name, { params = null, lod = null, preset = undefined, 
   state.presetName = preset ?? first?.name ?? null;
   state.editor.open(name, params ?? first?.values ?? null, lod ?? state.editor.lod, cameras);
   $('lod').value = String(state.editor.lod);
+  updateFitButton();
 }
 
 $('preset').addEventListener('change', (e) => {
@@ -560,22 +574,40 @@ function updateFitButton() {
   const button = $('fit-start');
   button.disabled = !ready || !!fitter.running || !state.editor;
   button.title = ready ? '' : 'Add a photo and wait for its mask first';
+  const refit = $('refit');
+  const fittable = !!state.editor?.spec?.differentiable;
+  refit.disabled = button.disabled || !fittable;
+  refit.title = !ready ? button.title : fittable ? 'Fit again, starting from the values above' : 'This generator cannot be fitted in this build';
 }
 
-$('fit-start').addEventListener('click', async () => {
-  say(fitMessage, '');
+$('fit-start').addEventListener('click', () => {
   const generator = fitGenerator();
   const spec = state.specs.find((g) => g.name === generator);
   if (spec && !spec.differentiable) {
     say(fitMessage, `The ${spec.label.toLowerCase()} generator cannot be fitted in this build; choose another or Automatic.`);
     return;
   }
+  runFit({ generator });
+});
+
+// "Refit from here": the edited model (say, a handle fixed by hand) joins the fit's starting
+// population, so the fit polishes it against the photos instead of starting over.
+$('refit').addEventListener('click', () => {
+  const editor = state.editor;
+  if (!editor?.spec) return;
+  runFit({ generator: editor.spec.name, start: editor.params.slice() });
+});
+
+/** Runs a fit and hands its model to the editor; `start`: parameters to start from. */
+async function runFit({ generator, start = null }) {
+  say(fitMessage, '');
   $('fit-cancel').hidden = false;
   $('fit-start').disabled = true;
+  $('refit').disabled = true;
   $('fit-cancel').focus();
   let outcome = 'failed';
   try {
-    const out = await fitter.run({ generator, photos: state.photos.slice(), quality: Number($('fit-quality').value) });
+    const out = await fitter.run({ generator, photos: state.photos.slice(), quality: Number($('fit-quality').value), start });
     const r = out.result;
     chooseGenerator(r.generator, { params: r.params, lod: state.editor.lod, preset: 'fitted', cameras: r.cameras });
     say(
@@ -600,7 +632,7 @@ $('fit-start').addEventListener('click', async () => {
     // For the browser tests: the fit's outcome, set once the page is back to rest.
     document.body.dataset.fitted = outcome;
   }
-});
+}
 $('fit-cancel').addEventListener('click', () => fitter.cancel());
 
 async function boot() {

@@ -34,8 +34,14 @@ export const REQUESTS = Object.freeze({
   MASK_RECT: 'mask/rect', //   { key, rect: [x0, y0, x1, y1] } → mask (start over from a box)
   MASK_STROKE: 'mask/stroke', // { key, object: bool, points: [x, y, …], radius } → mask
   MASK_DROP: 'mask/drop', //   { key } → {} (the photo was removed)
-  // { fitId, generator ('auto' or a name), seed, quality, masks: [{ width, height, codes }] }
+  // { bytes: ArrayBuffer } (the original photo file) → { focal_35mm: number | null }: the
+  // EXIF 35 mm-equivalent focal length, read before the page's downscaling drops the EXIF.
+  PHOTO_FOCAL: 'photo/focal',
+  // { fitId, generator ('auto' or a name), seed, quality, start?: number[],
+  //   masks: [{ width, height, codes, focal_35mm?: number | null }] }
   // → { cancelled, result: { generator, params, lod, seed, loss, evaluations, cameras } }
+  // `start`: the named generator's parameters to start from ("Refit from here"); a mask's
+  // `focal_35mm` (from PHOTO_FOCAL) sets that view's field of view, else the default is used.
   // (`cameras` as GENERATE_GLB takes them). On the way:
   // event 'progress' { stage, generator, iteration, evaluations, work_done, work_total,
   // best_loss, params, done, preview: { width, height, coverage: ArrayBuffer } | null }.
@@ -43,4 +49,4 @@ export const REQUESTS = Object.freeze({
   FIT_CANCEL: 'fit/cancel', // { fitId } → { found }: the running fit stops after its slice
 });
 
-export const PROTOCOL_VERSION = 3;
+export const PROTOCOL_VERSION = 4;

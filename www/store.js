@@ -1,6 +1,7 @@
-// Work is not lost: the session (downscaled photos, their masks and don't-care strokes, the
-// model's generator, parameters, level of detail and starting point) is kept in IndexedDB on
-// this device and restored when the page is opened again. Nothing here leaves the device.
+// Work is not lost: the session (downscaled photos with their EXIF focal lengths, their masks
+// and don't-care strokes, the model's generator, parameters, level of detail and starting
+// point) is kept in IndexedDB on this device and restored when the page is opened again.
+// Nothing here leaves the device.
 
 const DB = 'procfit';
 const STORE = 'session';
@@ -53,7 +54,7 @@ export function clear() {
 
 /** Serialises a photo for storage: the downscaled JPEG and its mask with don't-care strokes. */
 export async function photoRecord(p) {
-  const rec = { id: p.id, name: p.name, width: p.width, height: p.height, blob: p.blob, mask: null };
+  const rec = { id: p.id, name: p.name, width: p.width, height: p.height, blob: p.blob, focal35mm: p.focal35mm ?? null, mask: null };
   if (p.mask) {
     const { codes, dontCare, ...info } = p.mask;
     rec.mask = { ...info, codes, dontCare: await dontCare.convertToBlob({ type: 'image/png' }) };
@@ -64,7 +65,7 @@ export async function photoRecord(p) {
 /** Rebuilds a photo from its record (the inverse of photoRecord). */
 export async function photoFromRecord(rec) {
   const bitmap = await createImageBitmap(rec.blob);
-  const photo = { id: rec.id, name: rec.name, width: rec.width, height: rec.height, bitmap, blob: rec.blob };
+  const photo = { id: rec.id, name: rec.name, width: rec.width, height: rec.height, bitmap, blob: rec.blob, focal35mm: rec.focal35mm ?? null };
   if (rec.mask) {
     const { dontCare, ...mask } = rec.mask;
     const canvas = new OffscreenCanvas(mask.width, mask.height);

@@ -54,6 +54,10 @@ const handlers = {
     masks.delete(key);
     return {};
   },
+  [REQUESTS.PHOTO_FOCAL]: ({ bytes }) => {
+    const f = wasm.focal35mmFromFile(new Uint8Array(bytes));
+    return { focal_35mm: f > 0 ? f : null };
+  },
   [REQUESTS.FIT_RUN]: (payload, emit) => runFit(payload, emit),
   [REQUESTS.FIT_CANCEL]: ({ fitId }) => {
     const found = fits.has(fitId);
@@ -91,7 +95,7 @@ const tick = (() => {
 /** Progress frames at most this often (plus stage changes and the end). */
 const PROGRESS_MS = 100;
 
-async function runFit({ fitId, generator, seed = 1, quality = 1, masks: views }, emit) {
+async function runFit({ fitId, generator, seed = 1, quality = 1, start = [], masks: views }, emit) {
   if (!views?.length) throw new Error('no masks to fit: add a photo first');
   const total = views.reduce((n, m) => n + m.width * m.height, 0);
   const codes = new Uint8Array(total);
@@ -107,6 +111,9 @@ async function runFit({ fitId, generator, seed = 1, quality = 1, masks: views },
     Uint32Array.from(views.map((m) => m.width)),
     Uint32Array.from(views.map((m) => m.height)),
     codes,
+    // 0: no focal length known for that view (the core's default field of view).
+    Float64Array.from(views.map((m) => (m.focal_35mm > 0 ? wasm.fovFromFocal35mm(m.focal_35mm, m.width, m.height) : 0))),
+    Float64Array.from(start),
   );
   const job = { cancelled: false };
   fits.set(fitId, job);

@@ -59,6 +59,10 @@ pub struct FitConfig {
     pub resolutions: [u32; 3],
     /// Level of detail of the stages.
     pub lods: [Lod; 3],
+    /// Generator parameters to start from ("refit from here": the model the user edited). It
+    /// joins stage 1's seed population first, with every camera guess, and is polished like
+    /// the presets (paper §3.2). Needs a named generator (not `auto`) and its parameter count.
+    pub start: Option<Vec<f64>>,
 }
 
 impl Default for FitConfig {
@@ -76,6 +80,7 @@ impl Default for FitConfig {
             // polygonal that, measured on random dishes, the true shape scored worse at 128² than
             // a wrong camera pitch; MEDIUM (24 sectors) does not have that problem.
             lods: [Lod::Low, Lod::Medium, Lod::High],
+            start: None,
         }
     }
 }
@@ -266,6 +271,19 @@ impl Session {
         if candidates.is_empty() {
             return Err(FitError("no differentiable generator is built in".into()));
         }
+        // The start vector belongs to one generator, so `auto` cannot use it.
+        let start = match (&config.start, candidates.as_slice()) {
+            (None, _) => None,
+            (Some(x), [g]) => Some(
+                generators::sanitize_params(g.params(), x)
+                    .map_err(|e| FitError(format!("start parameters: {e}")))?,
+            ),
+            (Some(_), _) => {
+                return Err(FitError(
+                    "start parameters need a named generator, not `auto`".into(),
+                ));
+            }
+        };
         let stage1 = config
             .budget
             .unwrap_or(((DEFAULT_EVALUATIONS as f64) * config.quality).round() as usize)
@@ -281,7 +299,8 @@ impl Session {
             .collect();
         let mut searches = Vec::new();
         for (k, &g) in candidates.iter().enumerate() {
-            let (layout, domain, seeds) = start_points(g, &stats, &fov, config.fit_fov)?;
+            let (layout, domain, seeds) =
+                start_points(g, start.as_deref(), &stats, &fov, config.fit_fov)?;
             let objective = FitObjective::new(g, config.lods[0], layout, small.clone(), 0.0, false);
             let memetic = Memetic::new(
                 domain,
@@ -697,11 +716,12 @@ fn probe(
 /// Camera pitch candidates (radians; positive looks down on the object).
 const PITCHES: [f64; 3] = [0.15, 0.45, 0.8];
 
-/// The layout, the domain and the seed points of a generator's stage 1: each of the
-/// generator's seeds × each camera candidate, with scale and translation solved per view from
-/// the mask's bounding box.
+/// The layout, the domain and the seed points of a generator's stage 1: `start` (if any) and
+/// then each of the generator's seeds, × each camera candidate, with scale and translation
+/// solved per view from the mask's bounding box.
 fn start_points(
     g: &'static dyn Generator,
+    start: Option<&[f64]>,
     stats: &[MaskStats],
     fov: &[f64],
     fit_fov: bool,
@@ -714,7 +734,8 @@ fn start_points(
     };
     let mut seeds = Vec::new();
     let (mut ls_lo, mut ls_hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for seed in g.seeds() {
+    // The start first: with more seeds than places, screening keeps seed order on ties.
+    for seed in start.map(<[f64]>::to_vec).into_iter().chain(g.seeds()) {
         let Ok(mesh) = g.generate(&seed, Lod::Low) else {
             continue;
         };

@@ -110,6 +110,21 @@ pub fn focal_35mm_from_exif(exif: &[u8]) -> Option<f64> {
     (value > 0.0).then_some(value)
 }
 
+/// `FocalLengthIn35mmFilm` from an image file's bytes (a JPEG's APP1 block, or whatever EXIF
+/// the `image` crate finds in a PNG or WebP). `None` when the file is not a readable image or
+/// carries no such tag. Only the headers are read, not the pixels. The page calls this on the
+/// original file, because its downscaled bitmap has lost the EXIF.
+pub fn focal_35mm_from_file(bytes: &[u8]) -> Option<f64> {
+    use image::ImageDecoder;
+    let mut decoder = image::ImageReader::new(std::io::Cursor::new(bytes))
+        .with_guessed_format()
+        .ok()?
+        .into_decoder()
+        .ok()?;
+    let exif = decoder.exif_metadata().ok()??;
+    focal_35mm_from_exif(&exif)
+}
+
 /// The fixed camera pose of every view.
 pub fn camera_pose() -> CameraPose {
     // Cannot fail: eye and target differ and Y is not along the viewing direction.

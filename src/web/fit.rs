@@ -84,8 +84,15 @@ fn masks_of(widths: &[u32], heights: &[u32], codes: &[u8]) -> Result<Vec<Mask>, 
 #[wasm_bindgen]
 impl FitSession {
     /// Starts a fit of `generator` (or `auto`) to the masks (see `masks_of`); nothing is
-    /// evaluated yet. `quality` scales every stage's budget (1 = default).
+    /// evaluated yet. `quality` scales every stage's budget (1 = default). `fov_y`: one
+    /// vertical field of view (radians) per mask, 0 where unknown (the default is used), or
+    /// empty. `start`: the generator's parameters to start from ("refit from here"; a named
+    /// generator only), or empty.
     #[wasm_bindgen(constructor)]
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "flat numbers and typed arrays are what crosses the wasm boundary cheaply"
+    )]
     pub fn new(
         generator: &str,
         seed: u32,
@@ -93,14 +100,26 @@ impl FitSession {
         widths: &[u32],
         heights: &[u32],
         codes: &[u8],
+        fov_y: &[f64],
+        start: &[f64],
     ) -> Result<FitSession, JsError> {
         if !(quality.is_finite() && quality > 0.0 && quality <= 16.0) {
             return Err(JsError::new("quality must be in (0, 16]"));
+        }
+        if !fov_y.is_empty() && fov_y.len() != widths.len() {
+            return Err(JsError::new(&format!(
+                "{} fields of view for {} masks",
+                fov_y.len(),
+                widths.len()
+            )));
         }
         let config = FitConfig {
             generator: generator.to_string(),
             seed: u64::from(seed),
             quality,
+            // 0 stands for "unknown"; anything else is checked by the session.
+            fov_y: fov_y.iter().map(|&f| (f != 0.0).then_some(f)).collect(),
+            start: (!start.is_empty()).then(|| start.to_vec()),
             ..FitConfig::default()
         };
         let masks = masks_of(widths, heights, codes)?;

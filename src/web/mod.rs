@@ -282,3 +282,17 @@ pub fn open_model(bytes: &[u8]) -> Result<JsValue, JsError> {
     };
     serde_wasm_bindgen::to_value(&ModelOut::from(&model)).map_err(|e| JsError::new(&e.to_string()))
 }
+
+/// The 35 mm-equivalent focal length from a photo file's EXIF (the original bytes: the page's
+/// downscaled bitmap has lost its EXIF), or 0 when the file has none.
+#[wasm_bindgen(js_name = focal35mmFromFile)]
+pub fn focal_35mm_from_file(bytes: &[u8]) -> f64 {
+    crate::reconstruct::views::focal_35mm_from_file(bytes).unwrap_or(0.0)
+}
+
+/// The vertical field of view (radians) of a `width × height` photo taken at a 35 mm-equivalent
+/// focal length, or 0 when an argument is not positive.
+#[wasm_bindgen(js_name = fovFromFocal35mm)]
+pub fn fov_from_focal_35mm(focal_35mm: f64, width: u32, height: u32) -> f64 {
+    crate::reconstruct::fov_from_focal_35mm(focal_35mm, width, height).unwrap_or(0.0)
+}

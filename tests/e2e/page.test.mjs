@@ -183,6 +183,96 @@ test('multi-view: a second photo of the mug by the file picker, and the fit uses
   await settled();
 });
 
+/**
+ * `jpeg` with an EXIF block (APP1, after the JFIF APP0) whose only tag is FocalLengthIn35mmFilm
+ * = `mm`: a little-endian TIFF header, IFD0 pointing at the Exif IFD, which holds tag 0xA405.
+ */
+function withExifFocal(jpeg, mm) {
+  const tiff = Buffer.alloc(44);
+  tiff.write('II', 0, 'latin1');
+  tiff.writeUInt16LE(42, 2);
+  tiff.writeUInt32LE(8, 4); // IFD0
+  tiff.writeUInt16LE(1, 8);
+  tiff.writeUInt16LE(0x8769, 10); // ExifIFDPointer, LONG × 1 → 26
+  tiff.writeUInt16LE(4, 12);
+  tiff.writeUInt32LE(1, 14);
+  tiff.writeUInt32LE(26, 18);
+  tiff.writeUInt32LE(0, 22);
+  tiff.writeUInt16LE(1, 26);
+  tiff.writeUInt16LE(0xa405, 28); // FocalLengthIn35mmFilm, SHORT × 1
+  tiff.writeUInt16LE(3, 30);
+  tiff.writeUInt32LE(1, 32);
+  tiff.writeUInt16LE(mm, 36);
+  tiff.writeUInt32LE(0, 40);
+  const body = Buffer.concat([Buffer.from('Exif\0\0', 'latin1'), tiff]);
+  const head = Buffer.from([0xff, 0xe1, 0, 0]);
+  head.writeUInt16BE(body.length + 2, 2);
+  assert.deepEqual([...jpeg.subarray(0, 4)], [0xff, 0xd8, 0xff, 0xe0], 'expected a JFIF JPEG');
+  const app0End = 4 + jpeg.readUInt16BE(4);
+  return Buffer.concat([jpeg.subarray(0, app0End), head, body, jpeg.subarray(app0End)]);
+}
+
+test('a photo with an EXIF focal length shows it, and the fit uses its field of view', async () => {
+  const side = withExifFocal(readFileSync(join(ROOT, 'www', 'samples', 'mug-side.jpg')), 28);
+  await page.setInputFiles('#file', { name: 'mug at 28 mm.jpg', mimeType: 'image/jpeg', buffer: side });
+  await page.waitForFunction(() => window.procfit.state.photos.length === 2 && window.procfit.state.photos.every((p) => p.mask));
+  const focals = await page.evaluate(() => window.procfit.state.photos.map((p) => p.focal35mm));
+  assert.deepEqual(focals, [null, 28], 'the sample has no EXIF; the built JPEG says 28 mm');
+  assert.match(await page.textContent('#photo-caption'), /fov from EXIF: 28 mm/);
+  // The fit's cameras carry the field of view each view was fitted with (yfov first of 18).
+  await page.selectOption('#fit-quality', '0.25');
+  await page.evaluate(() => delete document.body.dataset.fitted);
+  await page.click('#fit-start');
+  await page.waitForFunction(() => document.body.dataset.fitted, null, { timeout: 180000 });
+  assert.equal(await page.evaluate(() => document.body.dataset.fitted), 'done', await messageOf('fit-message'));
+  await settled();
+  const yfov = await page.evaluate(() => [window.procfit.editor.cameras[0], window.procfit.editor.cameras[18]]);
+  // 28 mm on a 4:3 landscape photo: half the diagonal of 36 × 24 over the focal length, scaled
+  // to the vertical side (3 of the diagonal's 5).
+  const want = 2 * Math.atan((Math.hypot(36, 24) / 2 / 28) * (3 / 5));
+  assert.ok(Math.abs(yfov[1] - want) < 1e-4, `view 2's yfov ${yfov[1]} ≠ ${want} from 28 mm`);
+  // View 1 has no EXIF: the core's DEFAULT_FOV_Y (reconstruct::views).
+  assert.ok(Math.abs(yfov[0] - 0.4713471) < 1e-4, `view 1's yfov ${yfov[0]} is not the default`);
+  await page.click('#thumbs li:last-child .remove');
+  await page.selectOption('#fit-quality', '1');
+  await page.selectOption('#preset', 'mug');
+  await settled();
+});
+
+test('"Refit from here" fits again starting from the sliders', async () => {
+  // The model as a person left it: one slider moved by hand.
+  await page.focus('#param-y_scale');
+  await page.keyboard.press('ArrowUp');
+  await settled();
+  const sliders = await page.evaluate(() => window.procfit.editor.params.slice());
+  const generator = await page.evaluate(() => window.procfit.editor.spec.name);
+  // Record what the page asks the worker for.
+  await page.evaluate(() => {
+    const client = window.procfit.client;
+    const call = client.call.bind(client);
+    window.fitRequests = [];
+    client.call = (type, payload, opts) => {
+      if (type === window.procfit.REQUESTS.FIT_RUN) window.fitRequests.push({ generator: payload.generator, start: payload.start });
+      return call(type, payload, opts);
+    };
+  });
+  await page.selectOption('#fit-quality', '0.25');
+  await page.evaluate(() => delete document.body.dataset.fitted);
+  assert.equal(await page.isDisabled('#refit'), false);
+  await page.click('#refit');
+  await page.waitForFunction(() => document.body.dataset.fitted, null, { timeout: 180000 });
+  assert.equal(await page.evaluate(() => document.body.dataset.fitted), 'done', await messageOf('fit-message'));
+  const reqs = await page.evaluate(() => window.fitRequests);
+  assert.deepEqual(reqs, [{ generator, start: sliders }]);
+  await settled();
+  const after = await page.evaluate(() => window.procfit.editor.params.slice());
+  assert.notDeepEqual(after, sliders, 'the refit did not hand a model to the editor');
+  assert.equal(await page.inputValue('#preset'), 'fitted');
+  await page.selectOption('#fit-quality', '1');
+  await page.selectOption('#preset', 'mug');
+  await settled();
+});
+
 test('a slider moved from the keyboard changes the mesh, the view and the GLB; undo/redo restore it', async () => {
   const before = await viewFingerprint();
   const glbBefore = await page.evaluate(() => window.procfit.editor.glb.bytes.length);
