@@ -31,6 +31,9 @@ test('a reload restores photos, masks, the model and its starting point', async 
   await page.click('button[data-sample="bowl"]');
   await maskFound();
   await page.selectOption('#lod', '0');
+  // The sample has no EXIF; a focal length as photoOf (main.js) would have read must be kept
+  // (page.test.mjs checks the reading itself). The slider change below saves it.
+  await page.evaluate(() => (window.procfit.state.photos[0].focal35mm = 35));
   await page.focus('#param-y_scale');
   await page.keyboard.press('End');
   await settled();
@@ -52,7 +55,9 @@ test('a reload restores photos, masks, the model and its starting point', async 
     lod: window.procfit.editor.lod,
     codes: Array.from(window.procfit.state.photos[0].mask.codes.slice(0, 4096)),
     photos: window.procfit.state.photos.length,
+    focal: window.procfit.state.photos[0].focal35mm,
   }));
+  assert.equal(afterReload.focal, 35, 'the EXIF focal length was not kept');
   assert.equal(afterReload.photos, 1);
   assert.deepEqual(afterReload.params, before.params);
   assert.deepEqual(afterReload.base, before.base);
