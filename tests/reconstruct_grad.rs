@@ -206,3 +206,29 @@ fn focal_length_from_exif_blocks() {
     assert_eq!(focal_35mm_from_exif(&full[..38]), Some(50.0));
     assert_eq!(focal_35mm_from_exif(b"garbage bytes here"), None);
 }
+
+/// The focal length from a whole JPEG file (what the page reads from the original photo): a
+/// small JPEG encoded here gets an APP1 `Exif` segment after SOI; without it there is none, and
+/// bytes that are not an image give none either.
+#[test]
+fn focal_length_from_a_jpeg_file() {
+    use procfit::reconstruct::views::focal_35mm_from_file;
+    let img = image::RgbImage::from_fn(32, 24, |x, y| {
+        image::Rgb([(x * 8) as u8, (y * 8) as u8, 90])
+    });
+    let mut plain = Vec::new();
+    image::codecs::jpeg::JpegEncoder::new(&mut plain)
+        .encode_image(&img)
+        .unwrap();
+    let mut app1 = b"Exif\0\0".to_vec();
+    app1.extend(exif_block(false, 28));
+    let mut with_exif = plain[..2].to_vec();
+    with_exif.extend_from_slice(&[0xFF, 0xE1]);
+    with_exif.extend_from_slice(&u16::try_from(app1.len() + 2).unwrap().to_be_bytes());
+    with_exif.extend(app1);
+    with_exif.extend_from_slice(&plain[2..]);
+    assert_eq!(focal_35mm_from_file(&with_exif), Some(28.0));
+    assert_eq!(focal_35mm_from_file(&plain), None);
+    assert_eq!(focal_35mm_from_file(b"not an image at all"), None);
+    assert_eq!(focal_35mm_from_file(&with_exif[..40]), None);
+}
