@@ -45,7 +45,7 @@ pub const CAMERA_DISTANCE: f64 = 3.0;
 
 /// Vertical field of view used when a photo says nothing: that of a 50 mm "normal" lens on
 /// 35 mm film in landscape (36 × 24 mm frame), 2·atan(12/50).
-pub const DEFAULT_FOV_Y: f64 = 0.471_347_150_586_071_1;
+pub const DEFAULT_FOV_Y: f64 = 0.471_089_961_441_726_7;
 
 /// Fitted values per view, in this order (plus `fov_y` when fitted).
 pub const VIEW_VARS: [&str; 6] = ["yaw", "pitch", "roll", "tx", "ty", "log_scale"];
@@ -453,4 +453,15 @@ pub fn view_domain(
         vars.push(Var::continuous(0.15, 1.6).with_unit(0.5));
     }
     vars
+}
+
+#[cfg(test)]
+mod fov_tests {
+    use super::DEFAULT_FOV_Y;
+
+    #[test]
+    fn default_fov_is_a_50mm_lens() {
+        // Regression: the constant once disagreed with its documented formula.
+        assert!((DEFAULT_FOV_Y - 2.0 * (12.0f64 / 50.0).atan()).abs() < 1e-15);
+    }
 }

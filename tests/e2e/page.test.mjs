@@ -232,7 +232,7 @@ test('a photo with an EXIF focal length shows it, and the fit uses its field of 
   const want = 2 * Math.atan((Math.hypot(36, 24) / 2 / 28) * (3 / 5));
   assert.ok(Math.abs(yfov[1] - want) < 1e-4, `view 2's yfov ${yfov[1]} ≠ ${want} from 28 mm`);
   // View 1 has no EXIF: the core's DEFAULT_FOV_Y (reconstruct::views).
-  assert.ok(Math.abs(yfov[0] - 0.4713471) < 1e-4, `view 1's yfov ${yfov[0]} is not the default`);
+  assert.ok(Math.abs(yfov[0] - 2 * Math.atan(12 / 50)) < 1e-6, `view 1's yfov ${yfov[0]} is not the default`);
   await page.click('#thumbs li:last-child .remove');
   await page.selectOption('#fit-quality', '1');
   await page.selectOption('#preset', 'mug');
