@@ -649,6 +649,52 @@ fn large_photo_is_downscaled_before_segmentation() {
     }
 }
 
+/// A large EXIF-rotated JPEG decoded at reduced DCT scale gives the same working image and mask
+/// as decoding every pixel (issue 5's scaled decode).
+fn check_scaled_decode(w: u32, h: u32, side: u32, orientation: u8) {
+    let mut scene = cup_scene(Bg::Gradient);
+    (scene.w, scene.h) = (w, h);
+    let (upright, _) = render(&scene, 3);
+    let inverse = match orientation {
+        6 => 8,
+        8 => 6,
+        other => other,
+    };
+    let mut stored = DynamicImage::ImageRgb8(upright);
+    stored.apply_orientation(Orientation::from_exif(inverse).unwrap());
+    let bytes = with_exif_orientation(&jpeg(&stored.to_rgb8(), 85), u16::from(orientation));
+    let fast = Photo::decode(&bytes, side).unwrap();
+    let full = Photo::decode_full(&bytes, side).unwrap();
+    let case = format!("{w}×{h} → {side}, orientation {orientation}");
+    assert_eq!(
+        (fast.width(), fast.height()),
+        (full.width(), full.height()),
+        "{case}"
+    );
+    assert_eq!(fast.source_size(), (w, h), "{case}");
+    assert_eq!(full.source_size(), (w, h), "{case}");
+    // Same pixels up to the DCT's rounding: mean absolute difference under 1.5 levels.
+    let diff: u64 = fast
+        .rgba()
+        .iter()
+        .zip(full.rgba())
+        .map(|(a, b)| u64::from(a.abs_diff(*b)))
+        .sum();
+    let mean = diff as f64 / fast.rgba().len() as f64;
+    assert!(mean < 1.5, "{case}: mean pixel difference {mean}");
+    let a = object_of(&segment_auto(&fast).unwrap());
+    let b = object_of(&segment_auto(&full).unwrap());
+    let score = iou(&a, &b);
+    assert!(score >= 0.99, "{case}: IoU {score}");
+}
+
+#[test]
+fn scaled_jpeg_decode_gives_the_full_decode_mask() {
+    check_scaled_decode(2048, 1536, 256, 6); // 1/8 scale, rotated
+    check_scaled_decode(1280, 960, 256, 3); // 1/4 scale, upside down
+    check_scaled_decode(1600, 1200, 512, 8); // 1/2 scale, rotated the other way
+}
+
 // ---------------------------------------------------------------- windows
 
 fn facade() -> (Scene, Vec<[f32; 4]>) {
