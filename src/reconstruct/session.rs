@@ -308,6 +308,11 @@ impl Session {
                 MemeticConfig {
                     max_evaluations: short_budget,
                     seed: config.seed.wrapping_add(k as u64),
+                    population: if masks.len() == 1 {
+                        SINGLE_VIEW_POPULATION
+                    } else {
+                        MemeticConfig::default().population
+                    },
                     ..MemeticConfig::default()
                 },
             )
@@ -424,7 +429,7 @@ impl Session {
         let mut pop: Vec<&crate::optim::Individual> = search.memetic.population().iter().collect();
         pop.sort_by(|a, b| a.value.total_cmp(&b.value));
         let mut starts: Vec<Vec<f64>> = vec![best.x.clone()];
-        for ind in pop {
+        for ind in &pop {
             if starts.len() >= PROBES {
                 break;
             }
@@ -713,8 +718,34 @@ fn probe(
     (best, spent)
 }
 
+/// Stage 1's population from a single view: larger than the memetic default (24, kept for
+/// several views), so the yaw-turned seeds ([`YAW_TURNS`]) do not crowd out the other shapes. Measured on the measured mug from 8
+/// random cameras (quality 1): mean IoU-64 0.840 without turns, 0.905 with turns at 24, 0.947
+/// with turns at 36.
+const SINGLE_VIEW_POPULATION: usize = 36;
+
 /// Camera pitch candidates (radians; positive looks down on the object).
 const PITCHES: [f64; 3] = [0.15, 0.45, 0.8];
+
+/// Yaw turns of the seeds whose shape is not turn-symmetric (radians, about the side-on
+/// guess). One silhouette barely tells a mug's handle turned 35° towards the camera from a
+/// shorter one seen side-on, and neither Adam nor the memetic steps cross from one to the
+/// other, so stage 1 starts from both.
+const YAW_TURNS: [f64; 3] = [0.0, -0.6, 0.6];
+
+/// Whether a mesh looks alike from every side, as far as its extent tells: equal widths along
+/// X and Z (within 2 %), centred on the Y axis. A mug's handle breaks it, a bare bowl does not.
+fn symmetric_about_y(positions: &[glam::Vec3]) -> bool {
+    let Some(&first) = positions.first() else {
+        return true;
+    };
+    let (lo, hi) = positions
+        .iter()
+        .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+    let size = hi - lo;
+    let tol = 0.02 * size.max_element();
+    (size.x - size.z).abs() <= tol && (lo.x + hi.x).abs() <= tol && (lo.z + hi.z).abs() <= tol
+}
 
 /// The layout, the domain and the seed points of a generator's stage 1: `start` (if any) and
 /// then each of the generator's seeds, × each camera candidate, with scale and translation
@@ -739,13 +770,24 @@ fn start_points(
         let Ok(mesh) = g.generate(&seed, Lod::Low) else {
             continue;
         };
+        // Turning a shape that looks the same from every side adds nothing but copies; with
+        // more than one view, the others tell the turn.
+        let turns = if stats.len() > 1 || symmetric_about_y(&mesh.positions) {
+            &YAW_TURNS[..1]
+        } else {
+            &YAW_TURNS[..]
+        };
         for yaw_flip in [false, true] {
-            for &pitch in &PITCHES {
+            for (&pitch, &turn) in PITCHES
+                .iter()
+                .flat_map(|p| turns.iter().map(move |t| (p, t)))
+            {
                 let mut x = seed.clone();
                 x.resize(layout.len(), 0.0);
                 let mut ok = true;
                 for (v, st) in stats.iter().enumerate() {
-                    let yaw = st.handle_yaw() + if yaw_flip { std::f64::consts::PI } else { 0.0 };
+                    let yaw =
+                        st.handle_yaw() + turn + if yaw_flip { std::f64::consts::PI } else { 0.0 };
                     let yaw = if yaw > std::f64::consts::PI {
                         yaw - std::f64::consts::TAU
                     } else {
