@@ -3,7 +3,7 @@
 // and a cancel button, and hands the fitted model to the editor. The worker runs the fit in
 // slices, so the page — and the sliders — stay responsive meanwhile.
 import { REQUESTS } from './protocol.js';
-import { fitCodes } from './masking.js';
+import { fitCodes, fitWindows } from './masking.js';
 
 /** What each stage does, in words (see reconstruct::session). */
 export const STAGES = {
@@ -30,9 +30,12 @@ export class FitRunner extends EventTarget {
    */
   async run({ generator, photos, quality, start = null }) {
     if (this.running) throw new Error('a fit is already running');
+    // Window labels only mean something to a building fit (or Automatic, which may pick one).
+    const useWindows = generator === 'building' || generator === 'auto';
     const masks = photos.map((p) => {
       const codes = fitCodes(p);
-      return { width: p.mask.width, height: p.mask.height, codes: codes.buffer, focal_35mm: p.focal35mm ?? null };
+      const windows = useWindows ? fitWindows(p) : null;
+      return { width: p.mask.width, height: p.mask.height, codes: codes.buffer, windows: windows?.buffer ?? null, focal_35mm: p.focal35mm ?? null };
     });
     const fitId = nextFit++;
     const t0 = performance.now();
@@ -49,7 +52,7 @@ export class FitRunner extends EventTarget {
       const out = await this.client.call(
         REQUESTS.FIT_RUN,
         { fitId, generator, seed: 1, quality, masks, ...(start ? { start } : {}) },
-        { transfer: masks.map((m) => m.codes), onEvent: (event, data) => event === 'progress' && this.progress(data, t0) },
+        { transfer: masks.flatMap((m) => (m.windows ? [m.codes, m.windows] : [m.codes])), onEvent: (event, data) => event === 'progress' && this.progress(data, t0) },
       );
       return { ...out, seconds: (performance.now() - t0) / 1000 };
     } finally {

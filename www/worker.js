@@ -54,6 +54,17 @@ const handlers = {
     masks.delete(key);
     return {};
   },
+  [REQUESTS.MASK_WINDOWS_AUTO]: ({ key }) => windowsOut(maskSession(key), maskSession(key).detectWindows()),
+  [REQUESTS.MASK_WINDOWS_STROKES]: ({ key, strokes = [] }) => {
+    const session = maskSession(key);
+    const labels = session.windowsFromStrokes(
+      Uint8Array.from(strokes.map((s) => (s.window ? 1 : 0))),
+      Uint32Array.from(strokes.map((s) => s.points.length / 2)),
+      Float32Array.from(strokes.flatMap((s) => s.points)),
+      Float32Array.from(strokes.map((s) => s.radius)),
+    );
+    return windowsOut(session, labels);
+  },
   [REQUESTS.PHOTO_FOCAL]: ({ bytes }) => {
     const f = wasm.focal35mmFromFile(new Uint8Array(bytes));
     return { focal_35mm: f > 0 ? f : null };
@@ -81,6 +92,11 @@ function maskOut(session) {
   return new Transfer({ ...session.info(), codes: codes.buffer }, [codes.buffer]);
 }
 
+function windowsOut(session, labels) {
+  const { width, height } = session.info();
+  return new Transfer({ width, height, codes: labels.buffer }, [labels.buffer]);
+}
+
 /** Yields to the worker's message loop (a cancel or a slider's request gets in), unclamped. */
 const tick = (() => {
   const ch = new MessageChannel();
@@ -104,6 +120,15 @@ async function runFit({ fitId, generator, seed = 1, quality = 1, start = [], mas
     codes.set(new Uint8Array(m.codes), at);
     at += m.width * m.height;
   }
+  // Window labels of the views that have them, concatenated (see FitSession::new).
+  const withWindows = views.filter((m) => m.windows);
+  const windowCodes = new Uint8Array(withWindows.reduce((n, m) => n + m.width * m.height, 0));
+  at = 0;
+  for (const m of withWindows) {
+    windowCodes.set(new Uint8Array(m.windows), at);
+    at += m.width * m.height;
+  }
+  const windowFlags = withWindows.length ? Uint8Array.from(views.map((m) => (m.windows ? 1 : 0))) : new Uint8Array(0);
   const session = new wasm.FitSession(
     generator,
     seed,
@@ -114,6 +139,8 @@ async function runFit({ fitId, generator, seed = 1, quality = 1, start = [], mas
     // 0: no focal length known for that view (the core's default field of view).
     Float64Array.from(views.map((m) => (m.focal_35mm > 0 ? wasm.fovFromFocal35mm(m.focal_35mm, m.width, m.height) : 0))),
     Float64Array.from(start),
+    windowFlags,
+    windowCodes,
   );
   const job = { cancelled: false };
   fits.set(fitId, job);
