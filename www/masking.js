@@ -77,6 +77,19 @@ function setMask(photo, m) {
   photo.mask = { ...m, codes: new Uint8Array(m.codes), dontCare: dontCare ?? blankCanvas(m.width, m.height) };
 }
 
+/** RGBA pixels of a round-capped stroke along `points` (working pixels), for a local brush. */
+function strokePixels(width, height, points, radius) {
+  const ctx = blankCanvas(width, height).getContext('2d');
+  ctx.strokeStyle = '#000';
+  ctx.lineWidth = 2 * radius;
+  ctx.lineCap = ctx.lineJoin = 'round';
+  ctx.beginPath();
+  points.forEach(([x, y], i) => (i ? ctx.lineTo(x, y) : ctx.moveTo(x, y)));
+  if (points.length === 1) ctx.lineTo(points[0][0] + 0.01, points[0][1]);
+  ctx.stroke();
+  return ctx.getImageData(0, 0, width, height).data;
+}
+
 /** A transparent canvas with its 2D context made (convertToBlob refuses a context-less one). */
 function blankCanvas(width, height) {
   const c = new OffscreenCanvas(width, height);
@@ -185,7 +198,16 @@ export class MaskEditor {
         const stroke = { window: this.tool === 'window', points: drag.points.flat(), radius: this.radius() };
         const strokes = [...(photo.windows?.strokes ?? []), stroke];
         if (!strokes.some((s) => s.window)) {
-          this.onError('Paint over a window first; the wall brush only corrects windows already found.');
+          if (!photo.windows?.codes) {
+            this.onError('Paint over a window first (windows brush), or find windows automatically.');
+            return;
+          }
+          // Windows found automatically: the wall brush erases them where it paints.
+          const codes = photo.windows.codes.slice();
+          const paint = strokePixels(photo.mask.width, photo.mask.height, drag.points, this.radius());
+          for (let i = 0; i < codes.length; i += 1) if (paint[4 * i + 3] > 0 && codes[i] === WINDOW) codes[i] = 1;
+          photo.windows = { codes, strokes: [] };
+          this.onChange(photo);
           return;
         }
         const w = await this.client.call(REQUESTS.MASK_WINDOWS_STROKES, { key: String(photo.id), strokes });
