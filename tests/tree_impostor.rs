@@ -79,11 +79,28 @@ fn iou64_is_one_for_the_same_tree_and_lower_for_another() {
     let g = TreeGenerator;
     let a = g.generate(&preset("oak"), Lod::Low).expect("oak");
     let b = g.generate(&preset("poplar"), Lod::Low).expect("poplar");
-    let same = silhouette_iou64(&a, &a, 32, 15.0).expect("iou");
-    let other = silhouette_iou64(&a, &b, 32, 15.0).expect("iou");
+    let same = silhouette_iou64(&a, &a, 32).expect("iou");
+    let other = silhouette_iou64(&a, &b, 32).expect("iou");
     assert!((same - 1.0).abs() < 1e-12, "{same}");
     assert!(other < 0.6, "{other}");
-    assert!(silhouette_iou64(&a, &b, 32, f64::NAN).is_err());
+    // The metric normalises each mesh to its bounding box: the same tree twice as large and
+    // moved aside is the same tree.
+    let mut moved = a.clone();
+    for p in &mut moved.positions {
+        *p = *p * 2.0 + glam::Vec3::new(3.0, 1.0, -2.0);
+    }
+    let moved_iou = silhouette_iou64(&a, &moved, 32).expect("iou");
+    assert!(moved_iou > 0.99, "{moved_iou}");
+    // Squashing it is not.
+    let mut squashed = a.clone();
+    for p in &mut squashed.positions {
+        p.y *= 0.5;
+    }
+    let squashed_iou = silhouette_iou64(&a, &squashed, 32).expect("iou");
+    assert!(squashed_iou < 0.8, "{squashed_iou}");
+    assert!(silhouette_iou64(&a, &b, 0).is_err());
+    let empty = procfit::generators::Mesh::default();
+    assert!(silhouette_iou64(&a, &empty, 32).is_err());
 }
 
 #[test]

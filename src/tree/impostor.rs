@@ -248,34 +248,23 @@ pub fn fit_tree(
     })
 }
 
-/// Average silhouette IoU of two tree meshes over 64 turntable views (azimuths `2πi/64`,
-/// framed by [`tree_view`] for a tree `tree_height` tall), the paper's evaluation metric
-/// (Table 2). Leaf cards and tubes together form the silhouette; IoU is soft
-/// (`Σ min / Σ max` of the anti-aliased coverages, [`crate::loss::iou`]).
-pub fn silhouette_iou64(a: &Mesh, b: &Mesh, size: u32, tree_height: f64) -> Result<f64, TreeError> {
-    let base = tree_view(size, size, tree_height)?;
-    let target = base.pose.position - DVec3::new(0.0, 0.5 * tree_height, 0.0);
-    let distance = target.length();
-    let mut renderer = Renderer::new(size, size)?;
-    let ta = Topology::new(&a.triangles, a.positions.len())?;
-    let tb = Topology::new(&b.triangles, b.positions.len())?;
-    let mut sum = 0.0;
-    for i in 0..64 {
-        let az = std::f64::consts::TAU * f64::from(i) / 64.0;
-        let view = View::turntable(
-            size,
-            size,
-            az,
-            distance,
-            base.params.fov_y,
-            DVec3::new(0.0, 0.5 * tree_height, 0.0),
-        )?;
-        let ca = renderer.forward(&ta, &a.positions, &view)?.to_vec();
-        let cb = renderer.forward(&tb, &b.positions, &view)?;
-        let mask = crate::mask::Mask::new(size, size, cb.to_vec())?;
-        sum += crate::loss::iou(&ca, &mask).map_err(|e| TreeError(e.to_string()))?;
-    }
-    Ok(sum / 64.0)
+/// The paper's evaluation metric (Table 2; notes "Evaluation as they did it"): the mean soft
+/// silhouette IoU (`Σ min / Σ max` of the anti-aliased coverages) of two tree meshes over 64
+/// turntable views (azimuth `2πi/64`, distance 3, vertical field of view 0.5 rad), rendered at
+/// `size × size`, after normalising **each** mesh to its own bounding box (centre at the
+/// origin, longest side 1; [`crate::reconstruct::eval::iou64`]).
+///
+/// The normalisation makes the metric blind to absolute size and placement: a fit from one
+/// photo has no scale, so only the tree's proportions and outline count. Leaf cards and tubes
+/// together form the silhouette. Errors on a mesh without vertices or extent, or a size
+/// outside the renderer's range.
+pub fn silhouette_iou64(a: &Mesh, b: &Mesh, size: u32) -> Result<f64, TreeError> {
+    crate::reconstruct::eval::iou64(
+        (&a.positions, &a.triangles),
+        (&b.positions, &b.triangles),
+        size,
+    )
+    .map_err(|e| TreeError(e.0))
 }
 
 /// Resamples a reference label image to `size × size` so that its tree sits where
