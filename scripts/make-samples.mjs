@@ -79,6 +79,20 @@ const SAMPLES = [
     wall: 0xc9dbe8,
     view: { dir: [0.3, 0.12, 1.0], yfov_deg: 40, fill: 0.8 },
   },
+  {
+    // A tree in a field: the tree fit's sample. Its parts in bark brown and leaf green, the
+    // colours the tree fit's labels look for.
+    name: 'oak',
+    label: 'Oak tree',
+    generator: 'tree',
+    preset: 'oak',
+    lod: 2,
+    color: null,
+    partColors: { trunk: 0x5b3c22, branch: 0x6a4528, leaf: 0x3d8a35 },
+    table: 0xd8cfb8,
+    wall: 0xdfe8ee,
+    view: { dir: [0.0, 0.1, 1.0], yfov_deg: 40, fill: 0.85 },
+  },
 ];
 const WIDTH = 640;
 const HEIGHT = 480;
@@ -125,7 +139,12 @@ try {
         scene.add(table, wall);
         viewer.grid.visible = false;
         viewer.model.traverse((o) => {
-          if (o.isMesh && s.color !== null) {
+          const part = s.partColors && Object.keys(s.partColors).find((k) => (o.material?.name ?? '').startsWith(k));
+          if (o.isMesh && part) {
+            o.material = o.material.clone();
+            o.material.color.set(s.partColors[part]);
+            o.material.roughness = 0.9;
+          } else if (o.isMesh && s.color !== null) {
             o.material = o.material.clone();
             o.material.color.set(s.color);
             o.material.roughness = 0.35;

@@ -9,7 +9,7 @@ import * as store from './store.js';
 import { CameraCapture } from './camera.js';
 import { Viewer } from './viewer.js';
 import { Editor, LODS } from './editor.js';
-import { MaskEditor, autoMask, reviveMask, detectWindows, WINDOW } from './masking.js';
+import { MaskEditor, autoMask, reviveMask, detectWindows, treeLabels, WINDOW } from './masking.js';
 import { FitRunner } from './fitting.js';
 
 const $ = (id) => document.getElementById(id);
@@ -238,11 +238,61 @@ function renderWindowTools() {
     : 'No windows found: paint a few with the windows brush.';
 }
 
+/**
+ * For trees: the branch / leaf labels the fit will see, over the photo, with their shares. They
+ * are made again when the photo or its mask changes.
+ */
+function renderTreeLabels() {
+  const photo = state.photos.find((p) => p.id === state.selected);
+  const tree = fitGenerator() === 'tree';
+  const line = $('tree-state');
+  line.hidden = !tree || !photo?.mask;
+  if (maskEditor.showTree !== tree) {
+    maskEditor.showTree = tree;
+    maskEditor.draw();
+  }
+  if (line.hidden) return;
+  const labels = photo.treeLabels;
+  if (!labels || photo.treeLabelsFor !== photo.mask.codes) {
+    line.textContent = 'Sorting branches from leaves…';
+    const codes = photo.mask.codes;
+    treeLabels(client, photo)
+      .then(() => {
+        photo.treeLabelsFor = codes;
+        photo.treeError = null;
+      })
+      .catch((err) => {
+        photo.treeLabels = null;
+        photo.treeLabelsFor = codes;
+        photo.treeError = err.message;
+      })
+      .finally(() => {
+        if (state.selected !== photo.id) return;
+        maskEditor.draw();
+        renderTreeLabels();
+      });
+    return;
+  }
+  if (photo.treeError) {
+    line.textContent = `The tree fit cannot use this photo: ${photo.treeError}`;
+    return;
+  }
+  let branch = 0;
+  let leaf = 0;
+  for (const l of labels) {
+    if (l === 1) branch += 1;
+    else if (l === 2) leaf += 1;
+  }
+  const all = Math.max(1, branch + leaf);
+  line.textContent = `What the tree fit sees, by colour: branches in brown (${Math.round((100 * branch) / all)} %), leaves in green (${Math.round((100 * leaf) / all)} %). Trees are fitted to one photo, the first.`;
+}
+
 function renderMaskState() {
   const box = $('mask-state');
   const photo = state.photos.find((p) => p.id === state.selected);
   $('mask-tools').hidden = !photo?.mask;
   renderWindowTools();
+  renderTreeLabels();
   box.dataset.kind = '';
   if (!photo) box.textContent = '';
   else if (photo.maskState === 'working') box.textContent = 'Finding the object…';
@@ -462,6 +512,7 @@ function buildGeneratorChoices() {
   const auto = el('input', { type: 'radio', name: 'generator', value: 'auto', id: 'gen-auto' });
   auto.addEventListener('change', () => {
     renderWindowTools();
+    renderTreeLabels();
     updateFitButton();
   });
   box.append(el('label', { class: 'choice', for: 'gen-auto' }, [auto, ' Automatic ', el('span', { class: 'muted' }, ['(the fit picks)'])]));
@@ -494,6 +545,7 @@ function chooseGenerator(name, { params = null, lod = null, preset = undefined, 
   state.editor.open(name, params ?? first?.values ?? null, lod ?? state.editor.lod, cameras);
   $('lod').value = String(state.editor.lod);
   renderWindowTools();
+  renderTreeLabels();
   updateFitButton();
 }
 
@@ -626,7 +678,7 @@ function setUpModelStep() {
 const fitMessage = $('fit-message');
 const fitter = new FitRunner({
   client,
-  els: { stage: $('fit-stage'), eta: $('fit-eta'), bar: $('fit-bar'), preview: $('fit-preview'), curve: $('fit-curve'), box: $('fit-progress') },
+  els: { stage: $('fit-stage'), eta: $('fit-eta'), bar: $('fit-bar'), preview: $('fit-preview'), curve: $('fit-curve'), box: $('fit-progress'), caption: $('fit-preview-caption') },
 });
 window.procfit.fitter = fitter;
 
@@ -648,7 +700,8 @@ function updateFitButton() {
 $('fit-start').addEventListener('click', () => {
   const generator = fitGenerator();
   const spec = state.specs.find((g) => g.name === generator);
-  if (spec && !spec.differentiable) {
+  // Trees have their own fit (a genetic search over the tree generator, paper §3.5).
+  if (spec && !spec.differentiable && generator !== 'tree') {
     say(fitMessage, `The ${spec.label.toLowerCase()} generator cannot be fitted in this build; choose another or Automatic.`);
     return;
   }

@@ -2,7 +2,8 @@
 // and the tools to correct it — a box around the object, object / background brushes (both
 // re-cut in the worker) and a "don't care" brush (pixels the fit must ignore, kept here and
 // merged into the mask codes when the fit starts). For buildings, window labels: found
-// automatically or from window / wall brushes (labelled in the worker), drawn in teal.
+// automatically or from window / wall brushes (labelled in the worker), drawn in teal; for
+// trees, the branch (brown) and leaf (green) labels the tree fit will see.
 //
 // Corrections are kept with the photo (`photo.edits`: the box and strokes since the last
 // automatic mask) so that a worker session made again — after a reload or a worker restart —
@@ -10,7 +11,14 @@
 import { REQUESTS } from './protocol.js';
 
 /** Overlay colours (RGBA) by mask code: background dimmed, object tinted, unsure in amber. */
-const TINT = { bg: [20, 20, 30, 120], obj: [40, 110, 255, 70], unsure: [255, 190, 0, 150], window: [0, 215, 190, 170] };
+const TINT = {
+  bg: [20, 20, 30, 120],
+  obj: [40, 110, 255, 70],
+  unsure: [255, 190, 0, 150],
+  window: [0, 215, 190, 170],
+  branch: [150, 90, 40, 200],
+  leaf: [40, 200, 60, 170],
+};
 
 /** Window label codes (segment::windows). */
 export const WINDOW = 2;
@@ -52,6 +60,24 @@ export async function reviveMask(client, photo) {
       : client.call(REQUESTS.MASK_STROKE, { key, object: e.object, points: e.points, radius: e.radius }),
   );
   await Promise.all([auto, ...replays]);
+}
+
+/** `photo`'s RGBA pixels at its mask's (working) size, as an ArrayBuffer. */
+export function photoPixels(photo) {
+  const { width, height } = photo.mask;
+  const ctx = new OffscreenCanvas(width, height).getContext('2d');
+  ctx.drawImage(photo.bitmap, 0, 0, width, height);
+  return ctx.getImageData(0, 0, width, height).data.buffer;
+}
+
+/** Asks the worker for `photo`'s tree labels (branch / leaf by colour, inside the mask). */
+export async function treeLabels(client, photo) {
+  const rgba = photoPixels(photo);
+  const codes = fitCodes(photo).buffer;
+  const { width, height } = photo.mask;
+  const t = await client.call(REQUESTS.TREE_LABELS, { width, height, rgba, codes }, { transfer: [rgba, codes] });
+  photo.treeLabels = new Uint8Array(t.labels);
+  return photo.treeLabels;
 }
 
 /** The window labels for the fit (0 background, 1 façade, 2 window, 255 don't care), or null. */
@@ -117,8 +143,9 @@ export class MaskEditor {
     this.tool = 'none';
     this.brush = 10;
     this.show = true;
-    // Window labels are drawn while the generator is a building.
+    // Window labels are drawn while the generator is a building, tree labels for a tree.
     this.showWindows = false;
+    this.showTree = false;
     this.drag = null;
     this.busy = false;
     overlay.dataset.tool = 'none';
@@ -264,8 +291,13 @@ export class MaskEditor {
       const img = ctx.createImageData(width, height);
       const d = img.data;
       const win = this.showWindows && photo.windows?.codes?.length === codes.length ? photo.windows.codes : null;
+      // For trees, what the fit will see: branches brown, leaves green (tree::labels).
+      const tree = this.showTree && photo.treeLabels?.length === codes.length ? photo.treeLabels : null;
       for (let i = 0; i < codes.length; i += 1) {
-        const t = win && win[i] === WINDOW ? TINT.window : codes[i] === 128 ? TINT.unsure : codes[i] > 128 ? TINT.obj : TINT.bg;
+        let t = codes[i] === 128 ? TINT.unsure : codes[i] > 128 ? TINT.obj : TINT.bg;
+        if (win && win[i] === WINDOW) t = TINT.window;
+        else if (tree && tree[i] === 1) t = TINT.branch;
+        else if (tree && tree[i] === 2) t = TINT.leaf;
         d.set(t, 4 * i);
       }
       ctx.putImageData(img, 0, 0);

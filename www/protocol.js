@@ -53,7 +53,18 @@ export const REQUESTS = Object.freeze({
   // event 'progress' { stage, generator, iteration, evaluations, work_done, work_total,
   // best_loss, params, done, preview: { width, height, coverage: ArrayBuffer } | null }.
   FIT_RUN: 'fit/run',
-  FIT_CANCEL: 'fit/cancel', // { fitId } → { found }: the running fit stops after its slice
+  FIT_CANCEL: 'fit/cancel', // { fitId } → { found }: the running fit (or tree fit) stops after its slice
+  // Trees (paper §3.5), from one photo's colours inside its mask. `rgba`: the photo at the mask's
+  // size (width × height × 4 bytes); `codes`: its mask codes (or empty: the whole photo).
+  // { width, height, rgba, codes } → { width, height, labels: ArrayBuffer } (0 background,
+  // 1 branch, 2 leaf, 255 don't care), for the preview over the photo.
+  TREE_LABELS: 'tree/labels',
+  // { fitId, seed, quality, width, height, rgba, codes } → { cancelled, result: { generator:
+  // 'tree', params, lod, seed, similarity, evaluations, cameras } }. On the way: event 'progress'
+  // { stage (1 GA, 2 seed trials, 3 local search), generation, evaluations, total_evaluations,
+  // best_similarity, params, done, preview: { width, height, labels: ArrayBuffer } | null } (the
+  // best tree's labels in the fit's square frame). Cancelled by FIT_CANCEL.
+  TREE_RUN: 'tree/run',
 });
 
-export const PROTOCOL_VERSION = 5;
+export const PROTOCOL_VERSION = 6;

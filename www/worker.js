@@ -70,6 +70,11 @@ const handlers = {
     return { focal_35mm: f > 0 ? f : null };
   },
   [REQUESTS.FIT_RUN]: (payload, emit) => runFit(payload, emit),
+  [REQUESTS.TREE_LABELS]: ({ width, height, rgba, codes }) => {
+    const labels = wasm.treeLabels(width, height, new Uint8Array(rgba), new Uint8Array(codes ?? 0));
+    return new Transfer({ width, height, labels: labels.buffer }, [labels.buffer]);
+  },
+  [REQUESTS.TREE_RUN]: (payload, emit) => runTreeFit(payload, emit),
   [REQUESTS.FIT_CANCEL]: ({ fitId }) => {
     const found = fits.has(fitId);
     if (found) fits.get(fitId).cancelled = true;
@@ -160,6 +165,46 @@ async function runFit({ fitId, generator, seed = 1, quality = 1, start = [], mas
           const coverage = session.previewCoverage();
           preview = { width: w, height: session.previewHeight(), coverage: coverage.buffer };
           transfer.push(coverage.buffer);
+        }
+        emit('progress', { ...p, preview }, transfer);
+      }
+      if (p.done || job.cancelled) break;
+      await tick();
+      if (job.cancelled) break;
+    }
+    return { cancelled: job.cancelled, result: session.result() };
+  } finally {
+    fits.delete(fitId);
+    session.free();
+  }
+}
+
+/** The tree GA's evaluations at quality 1 (TreeFitSession's default budget). */
+const TREE_EVALUATIONS = 4700;
+
+/** A tree fit, stepped in slices like runFit. */
+async function runTreeFit({ fitId, seed = 1, quality = 1, width, height, rgba, codes }, emit) {
+  const budget = quality === 1 ? 0 : Math.max(200, Math.round(TREE_EVALUATIONS * quality));
+  const session = new wasm.TreeFitSession(width, height, new Uint8Array(rgba), new Uint8Array(codes ?? 0), seed, budget);
+  const job = { cancelled: false };
+  fits.set(fitId, job);
+  try {
+    let last = 0;
+    let stage = 0;
+    for (;;) {
+      const p = session.step();
+      const now = performance.now();
+      // A preview comes only with the step that changed the best tree: always pass it on.
+      const w = session.previewWidth();
+      if (w || p.done || p.stage !== stage || now - last >= PROGRESS_MS) {
+        last = now;
+        stage = p.stage;
+        let preview = null;
+        const transfer = [];
+        if (w) {
+          const labels = session.previewLabels();
+          preview = { width: w, height: session.previewHeight(), labels: labels.buffer };
+          transfer.push(labels.buffer);
         }
         emit('progress', { ...p, preview }, transfer);
       }
