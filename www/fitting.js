@@ -201,6 +201,14 @@ export class FitRunner extends EventTarget {
         ctx.stroke();
       }
       if (ys.length < 1) continue;
+      if (ys.length === 1) {
+        // A stage of one step (the tree fit's seed trials) is a dot, not an empty slot.
+        ctx.fillStyle = colours[s];
+        ctx.beginPath();
+        ctx.arc(x0 + slot / 2, 24 + (H - 32) / 2, 3, 0, 2 * Math.PI);
+        ctx.fill();
+        continue;
+      }
       const lo = Math.min(...ys);
       const hi = Math.max(...ys);
       const span = hi - lo || 1;
