@@ -181,6 +181,18 @@ test('the fit gets the windows and finds the floors (within one)', async () => {
   const size = await page.evaluate(() => window.procfit.state.photos[0].mask.codes.length);
   assert.deepEqual(sent, [[size]], 'the fit request carried no window labels');
   await settled();
+  // For comparison (printed, not asserted): the same fit without the window labels.
+  const without = await page.evaluate(async (quality) => {
+    const { client, REQUESTS, state } = window.procfit;
+    const p = state.photos[0];
+    const codes = p.mask.codes.slice();
+    const out = await client.call(
+      REQUESTS.FIT_RUN,
+      { fitId: 999, generator: 'building', seed: 1, quality, masks: [{ width: p.mask.width, height: p.mask.height, codes: codes.buffer }] },
+      { transfer: [codes.buffer] },
+    );
+    return out.result.params;
+  }, Number(process.env.FIT_QUALITY ?? '0.25'));
   await screenshot(page, '10c-building-fitted');
   await page.locator('#fit-preview').screenshot({ path: join(ARTIFACTS, '10c-building-fit-preview.png') });
   await page.locator('#viewer').screenshot({ path: join(ARTIFACTS, '10c-building-fitted-view.png') });
@@ -199,6 +211,7 @@ test('the fit gets the windows and finds the floors (within one)', async () => {
   const [fitted, truth] = [columns(params), columns(sample.truth.params)];
   assert.equal(truth, 7);
   console.log(`# building sample fit (quick, with windows): ${seconds.toFixed(1)} s, ${params[floorsAt]} floors (truth ${truthFloors}), ${fitted} window columns in front (truth ${truth})`);
+  console.log(`# the same fit without windows: ${without[floorsAt]} floors, ${columns(without)} window columns in front`);
   // Not asserted: the columns come out between 7 and 13 depending on the effort (the layout
   // sweep changes one discrete value at a time; an entrance count needs several at once). The
   // core's test (tests/reconstruct_windows.rs) asserts them on its own building.
