@@ -254,8 +254,9 @@ fn other_cameras() {
 /// The page's building sample (www/samples/flats.jpg, rendered by procfit; 4 floors, 7 front
 /// window columns), segmented and its windows found as the page does, fitted at a few qualities
 /// with and without the window term; prints floors and window columns (`QUALITIES=0.25,1`).
-/// Measured: with windows 4 floors at both qualities (13 and 8 columns); without, 3 and 9
-/// floors (7 and 11 columns). The window sweep costs ~4000 evaluations at 128².
+/// Measured: with windows 4 floors at both qualities (7 and 8 columns: the true layout at
+/// quality 0.25); without, 3 and 9 floors (7 and 11 columns). The window sweep costs
+/// 3500–5000 evaluations at 128².
 #[test]
 #[ignore = "slow exploration; prints, asserts nothing"]
 fn flats_sample() {
