@@ -138,8 +138,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 pool.install(|| fit_tree(&reference, TreeTraits::default(), view, &cfg, mutation))?;
             let s = t.elapsed().as_secs_f64();
             let fit_mesh = g.generate(&fit.params, Lod::Medium)?;
-            let frame = 1.2 * truth[idx::HEIGHT].max(fit.params[idx::HEIGHT]);
-            let iou = silhouette_iou64(&truth_mesh, &fit_mesh, 128, frame)?;
+            let iou = silhouette_iou64(&truth_mesh, &fit_mesh, 128)?;
             let label = if k == 0 { "gaussian" } else { "algorithm 3" };
             println!(
                 "| {name} | {label} | {:.3} | {iou:.3} | {s:.1} |",

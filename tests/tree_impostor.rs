@@ -79,11 +79,28 @@ fn iou64_is_one_for_the_same_tree_and_lower_for_another() {
     let g = TreeGenerator;
     let a = g.generate(&preset("oak"), Lod::Low).expect("oak");
     let b = g.generate(&preset("poplar"), Lod::Low).expect("poplar");
-    let same = silhouette_iou64(&a, &a, 32, 15.0).expect("iou");
-    let other = silhouette_iou64(&a, &b, 32, 15.0).expect("iou");
+    let same = silhouette_iou64(&a, &a, 32).expect("iou");
+    let other = silhouette_iou64(&a, &b, 32).expect("iou");
     assert!((same - 1.0).abs() < 1e-12, "{same}");
     assert!(other < 0.6, "{other}");
-    assert!(silhouette_iou64(&a, &b, 32, f64::NAN).is_err());
+    // The metric normalises each mesh to its bounding box: the same tree twice as large and
+    // moved aside is the same tree.
+    let mut moved = a.clone();
+    for p in &mut moved.positions {
+        *p = *p * 2.0 + glam::Vec3::new(3.0, 1.0, -2.0);
+    }
+    let moved_iou = silhouette_iou64(&a, &moved, 32).expect("iou");
+    assert!(moved_iou > 0.99, "{moved_iou}");
+    // Squashing it is not.
+    let mut squashed = a.clone();
+    for p in &mut squashed.positions {
+        p.y *= 0.5;
+    }
+    let squashed_iou = silhouette_iou64(&a, &squashed, 32).expect("iou");
+    assert!(squashed_iou < 0.8, "{squashed_iou}");
+    assert!(silhouette_iou64(&a, &b, 0).is_err());
+    let empty = procfit::generators::Mesh::default();
+    assert!(silhouette_iou64(&a, &empty, 32).is_err());
 }
 
 #[test]
@@ -118,7 +135,7 @@ fn fit_reports_its_own_similarity_and_is_deterministic() {
     let (a, b) = (run(1), run(2));
     assert_eq!(a.params, b.params);
     assert_eq!(a.similarity, b.similarity);
-    assert_eq!(a.ga.evaluations, cfg.ga.evaluations());
+    assert_eq!(a.ga.evaluations, cfg.evaluations());
     // The reported similarity is that of the returned parameters.
     let r = TreeReference::new(&reference, TreeTraits::default(), cfg.similarity).expect("tree");
     let mut imp = TreeImpostor::new(view).expect("impostor");
@@ -195,4 +212,42 @@ fn framing_puts_the_tree_where_the_camera_expects_it() {
     let empty = LabelImage::new(4, 4, vec![0; 16]).expect("labels");
     assert!(frame_reference(&empty, 64).is_err());
     assert!(frame_reference(&img, 1).is_err());
+}
+
+#[test]
+fn photo_camera_sees_the_trunk_plane_where_the_photo_has_it() {
+    use procfit::tree::impostor::frame_reference_with;
+    // A tree off to the left in a wide photo.
+    let (w, h) = (300usize, 160usize);
+    let mut px = vec![0u8; w * h];
+    for y in 100..150 {
+        for x in 58..62 {
+            px[y * w + x] = BRANCH;
+        }
+    }
+    for y in 30..100 {
+        for x in 20..100 {
+            px[y * w + x] = LEAF;
+        }
+    }
+    let img = LabelImage::new(w as u32, h as u32, px).expect("labels");
+    let (_, framing) = frame_reference_with(&img, 128).expect("framed");
+    let fit_view = tree_view(128, 128, 12.0).expect("view");
+    let photo = framing.photo_view().expect("camera");
+    assert_eq!((photo.width, photo.height), (300, 160));
+    for q in [
+        glam::Vec3::new(0.0, 0.0, 0.0),
+        glam::Vec3::new(3.0, 9.0, 0.0),
+        glam::Vec3::new(-4.0, 5.0, 0.0),
+    ] {
+        let (r, _) = fit_view.project(q);
+        let (p, _) = photo.project(q);
+        // Reference pixel = 64 + (photo x − foot x)·scale, 0.9·128 + (photo y − foot y)·scale.
+        let expect_x = 64.0 + (p.x - framing.foot.0) * framing.scale;
+        let expect_y = 0.9 * 128.0 + (p.y - framing.foot.1) * framing.scale;
+        assert!(
+            (r.x - expect_x).abs() < 1e-6 && (r.y - expect_y).abs() < 1e-6,
+            "{q}: reference {r}, from the photo ({expect_x}, {expect_y})"
+        );
+    }
 }

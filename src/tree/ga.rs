@@ -125,6 +125,13 @@ impl GaConfig {
         leaves * self.population + self.nodes() * self.generations * offspring
     }
 
+    /// Generations per elementary GA for about `budget` evaluations in all (at least 1).
+    pub fn generations_for(&self, budget: usize) -> usize {
+        let first = self.children.pow(self.levels.saturating_sub(1) as u32) * self.population;
+        let per_generation = (self.nodes() * (self.population / 2)).max(1);
+        (budget.saturating_sub(first) / per_generation).max(1)
+    }
+
     fn check(&self, n_genes: usize) -> Result<(), TreeError> {
         let bad = |m: String| Err(TreeError(m));
         if n_genes == 0 {
@@ -183,19 +190,218 @@ pub struct GaResult {
     pub history: Vec<(usize, f64)>,
 }
 
-struct Run<'a, F> {
-    n: usize,
-    fitness: &'a F,
-    cfg: &'a GaConfig,
-    mutation: Mutation<'a>,
-    evaluations: usize,
-    best: Option<Individual>,
-    history: Vec<(usize, f64)>,
+/// How far each gene of a start genome is jittered (standard deviation) when it seeds a leaf
+/// GA, so the leaves do not all begin from the same few points.
+pub const START_JITTER: f64 = 0.05;
+
+/// One elementary GA of the population tree, while it runs.
+struct Frame {
+    /// Levels above the leaves.
+    level: usize,
+    /// Its random stream: child seeds first, then the leaf's genomes, then evolution.
+    rng: Rng,
+    child_seeds: Vec<u64>,
+    next_child: usize,
+    pop: Vec<Individual>,
+    started: bool,
+    generation: usize,
 }
 
-impl<F: Fn(&[f64]) -> f64 + Sync> Run<'_, F> {
-    fn evaluate(&mut self, genomes: Vec<Vec<f64>>) -> Vec<Individual> {
-        let f = self.fitness;
+impl Frame {
+    fn new(level: usize, seed: u64, children: usize) -> Frame {
+        let mut rng = Rng::new(seed);
+        let child_seeds = if level > 0 {
+            (0..children).map(|c| rng.next_u64() ^ c as u64).collect()
+        } else {
+            Vec::new()
+        };
+        Frame {
+            level,
+            rng,
+            child_seeds,
+            next_child: 0,
+            pop: Vec::new(),
+            started: false,
+            generation: 0,
+        }
+    }
+}
+
+/// The tree-structured GA as a resumable computation: [`TreeGa::step`] does one batch of
+/// fitness evaluations (a leaf GA's first population or one generation of one GA) and returns,
+/// so a caller can report progress and stop between batches. [`tree_ga`] runs it to the end.
+/// The elementary GAs run depth first (children before their parent), exactly as the
+/// recursive description; a seed gives the same run however it is stepped.
+pub struct TreeGa {
+    n: usize,
+    cfg: GaConfig,
+    stats: Option<MutationStats>,
+    start: Vec<Vec<f64>>,
+    leaves_started: usize,
+    evaluations: usize,
+    generations_done: usize,
+    best: Option<Individual>,
+    history: Vec<(usize, f64)>,
+    stack: Vec<Frame>,
+    top: Option<Vec<Individual>>,
+}
+
+impl TreeGa {
+    /// A GA over `n_genes` genes. `start`: genomes (genes in `[0, 1]`) that seed the leaf GAs
+    /// besides random ones — up to half of each leaf's population, taken in turn from the
+    /// list and jittered by [`START_JITTER`]; empty for the paper's all-random start. Errors on
+    /// bad settings, statistics for another genome length or a start genome of another length.
+    pub fn new(
+        n_genes: usize,
+        cfg: &GaConfig,
+        mutation: Mutation<'_>,
+        start: &[Vec<f64>],
+    ) -> Result<TreeGa, TreeError> {
+        cfg.check(n_genes)?;
+        let stats = match mutation {
+            Mutation::Gaussian => None,
+            Mutation::Quality(stats) => {
+                if stats.genes() != n_genes {
+                    return Err(TreeError(format!(
+                        "mutation statistics are for {} genes, the genome has {n_genes}",
+                        stats.genes()
+                    )));
+                }
+                Some(stats.clone())
+            }
+        };
+        if let Some(g) = start
+            .iter()
+            .find(|g| g.len() != n_genes || g.iter().any(|x| !x.is_finite()))
+        {
+            return Err(TreeError(format!(
+                "a start genome has {} genes (or a non-finite one), the GA {n_genes}",
+                g.len()
+            )));
+        }
+        Ok(TreeGa {
+            n: n_genes,
+            cfg: *cfg,
+            stats,
+            start: start.to_vec(),
+            leaves_started: 0,
+            evaluations: 0,
+            generations_done: 0,
+            best: None,
+            history: Vec::new(),
+            stack: vec![Frame::new(cfg.levels - 1, cfg.seed, cfg.children)],
+            top: None,
+        })
+    }
+
+    /// Whether the run is over.
+    pub fn done(&self) -> bool {
+        self.top.is_some()
+    }
+
+    /// Fitness evaluations made so far.
+    pub fn evaluations(&self) -> usize {
+        self.evaluations
+    }
+
+    /// Generations run so far, over all elementary GAs.
+    pub fn generations(&self) -> usize {
+        self.generations_done
+    }
+
+    /// The best individual seen so far.
+    pub fn best(&self) -> Option<&Individual> {
+        self.best.as_ref()
+    }
+
+    /// One batch of evaluations; returns whether the run is over (then a no-op).
+    pub fn step<F: Fn(&[f64]) -> f64 + Sync>(&mut self, fitness: &F) -> bool {
+        let size = self.cfg.population;
+        loop {
+            let Some(mut frame) = self.stack.pop() else {
+                return true;
+            };
+            if frame.level > 0 && frame.next_child < frame.child_seeds.len() {
+                let seed = frame.child_seeds[frame.next_child];
+                let level = frame.level - 1;
+                frame.next_child += 1;
+                self.stack.push(frame);
+                self.stack.push(Frame::new(level, seed, self.cfg.children));
+                continue;
+            }
+            if !frame.started {
+                frame.started = true;
+                if frame.level == 0 {
+                    let genomes = self.leaf_genomes(&mut frame.rng);
+                    frame.pop = self.evaluate(genomes, fitness);
+                    self.stack.push(frame);
+                    return false;
+                }
+                // Parents start from the best of each child's last population.
+                sort_best_first(&mut frame.pop);
+                frame.pop.truncate(size);
+            }
+            if frame.generation < self.cfg.generations {
+                self.generation(&mut frame.pop, &mut frame.rng, fitness);
+                frame.generation += 1;
+                self.generations_done += 1;
+                self.note();
+                self.stack.push(frame);
+                return false;
+            }
+            sort_best_first(&mut frame.pop);
+            match self.stack.last_mut() {
+                Some(parent) => {
+                    let share = size.div_ceil(self.cfg.children);
+                    parent.pop.extend(frame.pop.into_iter().take(share));
+                }
+                None => {
+                    self.top = Some(frame.pop);
+                    return true;
+                }
+            }
+        }
+    }
+
+    /// What the run found (so far, if it is not over: then `top` is empty).
+    pub fn result(&self) -> Result<GaResult, TreeError> {
+        let best = self
+            .best
+            .clone()
+            .ok_or_else(|| TreeError("the GA evaluated nothing".into()))?;
+        Ok(GaResult {
+            best,
+            top: self.top.clone().unwrap_or_default(),
+            evaluations: self.evaluations,
+            history: self.history.clone(),
+        })
+    }
+
+    /// A leaf GA's first genomes: start genomes (jittered) for up to half, the rest random.
+    fn leaf_genomes(&mut self, rng: &mut Rng) -> Vec<Vec<f64>> {
+        let size = self.cfg.population;
+        let seeded = if self.start.is_empty() { 0 } else { size / 2 };
+        let offset = self.leaves_started * seeded;
+        self.leaves_started += 1;
+        (0..size)
+            .map(|i| {
+                if i < seeded {
+                    let s = &self.start[(offset + i) % self.start.len()];
+                    s.iter()
+                        .map(|&x| (x + START_JITTER * rng.normal()).clamp(0.0, 1.0))
+                        .collect()
+                } else {
+                    (0..self.n).map(|_| rng.unit()).collect()
+                }
+            })
+            .collect()
+    }
+
+    fn evaluate<F: Fn(&[f64]) -> f64 + Sync>(
+        &mut self,
+        genomes: Vec<Vec<f64>>,
+        f: &F,
+    ) -> Vec<Individual> {
         let out: Vec<Individual> = genomes
             .into_par_iter()
             .map(|genome| {
@@ -220,88 +426,63 @@ impl<F: Fn(&[f64]) -> f64 + Sync> Run<'_, F> {
 
     fn mutate(&self, g: &mut Vec<f64>, rng: &mut Rng) {
         let m = ((self.cfg.mutation_genes * self.n as f64).round() as usize).clamp(1, self.n);
-        match self.mutation {
-            Mutation::Gaussian => {
+        match &self.stats {
+            None => {
                 for k in rng.choose(self.n, m) {
                     g[k] = (g[k] + self.cfg.sigma * rng.normal()).clamp(0.0, 1.0);
                 }
             }
-            Mutation::Quality(stats) => {
+            Some(stats) => {
                 *g = stats.mutate(g, m, self.cfg.sigma, self.cfg.quality_steps, rng);
             }
         }
     }
 
-    /// One elementary GA from an evaluated population; returns its last population, best first.
-    fn evolve(&mut self, mut pop: Vec<Individual>, rng: &mut Rng) -> Vec<Individual> {
+    /// One generation of an elementary GA: kill the weaker half, refill it with mutated
+    /// one-point crossovers of fitness-proportionally chosen survivors.
+    fn generation<F: Fn(&[f64]) -> f64 + Sync>(
+        &mut self,
+        pop: &mut Vec<Individual>,
+        rng: &mut Rng,
+        fitness: &F,
+    ) {
         let size = self.cfg.population;
-        for _ in 0..self.cfg.generations {
-            sort_best_first(&mut pop);
-            // Kill the weaker half.
-            pop.truncate(size - size / 2);
-            let total: f64 = pop.iter().map(|i| i.fitness).sum();
-            let pick = |rng: &mut Rng| -> usize {
-                // Fitness-proportional (roulette) choice; uniform when nobody scores.
-                if total <= 0.0 {
-                    return rng.below(pop.len());
-                }
-                let mut x = rng.unit() * total;
-                for (i, ind) in pop.iter().enumerate() {
-                    x -= ind.fitness;
-                    if x < 0.0 {
-                        return i;
-                    }
-                }
-                pop.len() - 1
-            };
-            let mut children = Vec::with_capacity(size - pop.len());
-            while pop.len() + children.len() < size {
-                let a = &pop[pick(rng)].genome;
-                let b = &pop[pick(rng)].genome;
-                // One-point crossover.
-                let cut = 1 + rng.below(self.n.max(2) - 1);
-                let mut child: Vec<f64> = a[..cut.min(self.n)]
-                    .iter()
-                    .chain(&b[cut.min(self.n)..])
-                    .copied()
-                    .collect();
-                if rng.unit() < self.cfg.mutation_chance {
-                    self.mutate(&mut child, rng);
-                }
-                children.push(child);
+        sort_best_first(pop);
+        // Kill the weaker half.
+        pop.truncate(size - size / 2);
+        let total: f64 = pop.iter().map(|i| i.fitness).sum();
+        let pick = |rng: &mut Rng, pop: &[Individual]| -> usize {
+            // Fitness-proportional (roulette) choice; uniform when nobody scores.
+            if total <= 0.0 {
+                return rng.below(pop.len());
             }
-            let evaluated = self.evaluate(children);
-            pop.extend(evaluated);
-            self.note();
-        }
-        sort_best_first(&mut pop);
-        pop
-    }
-
-    /// The GA at a node of the population tree `level` levels above the leaves.
-    fn node(&mut self, level: usize, seed: u64) -> Vec<Individual> {
-        let mut rng = Rng::new(seed);
-        let size = self.cfg.population;
-        let pop = if level == 0 {
-            let genomes = (0..size)
-                .map(|_| (0..self.n).map(|_| rng.unit()).collect())
-                .collect();
-            self.evaluate(genomes)
-        } else {
-            // Parents start from the best of each child's last population.
-            let k = self.cfg.children;
-            let share = size.div_ceil(k);
-            let mut pop = Vec::with_capacity(share * k);
-            for c in 0..k {
-                let child_seed = rng.next_u64() ^ c as u64;
-                let last = self.node(level - 1, child_seed);
-                pop.extend(last.into_iter().take(share));
+            let mut x = rng.unit() * total;
+            for (i, ind) in pop.iter().enumerate() {
+                x -= ind.fitness;
+                if x < 0.0 {
+                    return i;
+                }
             }
-            sort_best_first(&mut pop);
-            pop.truncate(size);
-            pop
+            pop.len() - 1
         };
-        self.evolve(pop, &mut rng)
+        let mut children = Vec::with_capacity(size - pop.len());
+        while pop.len() + children.len() < size {
+            let a = &pop[pick(rng, pop)].genome;
+            let b = &pop[pick(rng, pop)].genome;
+            // One-point crossover.
+            let cut = 1 + rng.below(self.n.max(2) - 1);
+            let mut child: Vec<f64> = a[..cut.min(self.n)]
+                .iter()
+                .chain(&b[cut.min(self.n)..])
+                .copied()
+                .collect();
+            if rng.unit() < self.cfg.mutation_chance {
+                self.mutate(&mut child, rng);
+            }
+            children.push(child);
+        }
+        let evaluated = self.evaluate(children, fitness);
+        pop.extend(evaluated);
     }
 }
 
@@ -310,7 +491,8 @@ fn sort_best_first(pop: &mut [Individual]) {
     pop.sort_by(|a, b| b.fitness.total_cmp(&a.fitness));
 }
 
-/// Maximises `fitness` over `[0, 1]^n_genes` with the tree-structured GA.
+/// Maximises `fitness` over `[0, 1]^n_genes` with the tree-structured GA (all leaf GAs start
+/// random): [`TreeGa`] run to the end.
 pub fn tree_ga<F>(
     n_genes: usize,
     fitness: &F,
@@ -320,33 +502,7 @@ pub fn tree_ga<F>(
 where
     F: Fn(&[f64]) -> f64 + Sync,
 {
-    cfg.check(n_genes)?;
-    if let Mutation::Quality(stats) = mutation
-        && stats.genes() != n_genes
-    {
-        return Err(TreeError(format!(
-            "mutation statistics are for {} genes, the genome has {n_genes}",
-            stats.genes()
-        )));
-    }
-    let mut run = Run {
-        n: n_genes,
-        fitness,
-        cfg,
-        mutation,
-        evaluations: 0,
-        best: None,
-        history: Vec::new(),
-    };
-    let top = run.node(cfg.levels - 1, cfg.seed);
-    let best = run
-        .best
-        .clone()
-        .ok_or_else(|| TreeError("the GA evaluated nothing".into()))?;
-    Ok(GaResult {
-        best,
-        top,
-        evaluations: run.evaluations,
-        history: run.history,
-    })
+    let mut ga = TreeGa::new(n_genes, cfg, mutation, &[])?;
+    while !ga.step(fitness) {}
+    ga.result()
 }

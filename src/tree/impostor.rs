@@ -12,15 +12,17 @@
 //! for every tree; [`fit_tree`] keeps one per rayon thread so the GA's parallel evaluations
 //! never share scratch space.
 
-use super::ga::{GaConfig, GaResult, Mutation, tree_ga};
+use super::ga::{GaConfig, GaResult, Individual, Mutation, Rng, TreeGa};
+use super::mutation::MutationStats;
 use super::similarity::{SimilarityConfig, TreeReference, TreeTraits};
-use super::{BACKGROUND, BRANCH, LEAF, TreeError, genome_to_params};
+use super::{BACKGROUND, BRANCH, LEAF, TreeError, genome_to_params, params_to_genome};
 use crate::camera::View;
-use crate::generators::tree::{LEAF_CARD_TRIANGLES, PART_LEAF, TreeGenerator, skeleton};
+use crate::generators::tree::{LEAF_CARD_TRIANGLES, PART_LEAF, TreeGenerator, idx, skeleton};
 use crate::generators::{Generator, Lod, Mesh};
 use crate::mask::LabelImage;
 use crate::render::{Renderer, Topology};
 use glam::DVec3;
+use rayon::prelude::*;
 use std::sync::Mutex;
 
 impl From<crate::render::RenderError> for TreeError {
@@ -149,7 +151,24 @@ pub struct TreeFitConfig {
     pub lod: Lod,
     /// Weigh in the branch-graph vertex count (the reference's in `traits`).
     pub use_graph_vertices: bool,
+    /// Seed half of each leaf GA's first population with the generator's presets (jittered,
+    /// [`super::ga::START_JITTER`]); `false` starts all-random as the paper does.
+    pub start_from_presets: bool,
+    /// The generator's `seed` parameter during the GA, or `None` to search it like any gene.
+    /// The seed only reshuffles branches, so as a gene it is noise the GA chases; fixed, every
+    /// genome has one meaning, and the seed is chosen afterwards ([`Self::seed_trials`]).
+    pub fixed_seed: Option<u32>,
+    /// After the GA, the best genome is tried with this many seeds (0, 1, …) and keeps the
+    /// best; 0 keeps the GA's.
+    pub seed_trials: usize,
+    /// Evaluations of the final local search on the best genome (batches of
+    /// [`POLISH_BATCH`]: one to three genes changed by `Normal(0, 0.05²)`, the best candidate
+    /// kept when it improves).
+    pub polish: usize,
 }
+
+/// Candidates per round of the final local search.
+pub const POLISH_BATCH: usize = 16;
 
 impl Default for TreeFitConfig {
     fn default() -> Self {
@@ -158,7 +177,18 @@ impl Default for TreeFitConfig {
             similarity: SimilarityConfig::default(),
             lod: Lod::Low,
             use_graph_vertices: false,
+            start_from_presets: true,
+            fixed_seed: Some(0),
+            seed_trials: 32,
+            polish: 256,
         }
+    }
+}
+
+impl TreeFitConfig {
+    /// Fitness evaluations the whole fit makes: GA, seed trials, local search.
+    pub fn evaluations(&self) -> usize {
+        self.ga.evaluations() + self.seed_trials + self.polish.div_ceil(POLISH_BATCH) * POLISH_BATCH
     }
 }
 
@@ -169,122 +199,453 @@ pub struct TreeFit {
     pub params: Vec<f64>,
     /// Its similarity to the reference.
     pub similarity: f64,
-    /// The GA's record (genomes in `[0, 1]`).
+    /// The GA's record (genomes in `[0, 1]`); `ga.best` is the fit's best genome, after the
+    /// seed trials and the local search.
     pub ga: GaResult,
 }
 
-/// The fitness of one genome: tree similarity of its impostor to the reference (0 when the
-/// genome cannot be built or rendered).
-fn fitness(
-    genome: &[f64],
-    reference: &TreeReference,
-    impostor: &mut TreeImpostor,
-    cfg: &TreeFitConfig,
-) -> Result<f64, TreeError> {
-    let g = TreeGenerator;
-    let params = genome_to_params(g.params(), genome)?;
-    let mesh = g.generate(&params, cfg.lod)?;
-    let labels = impostor.render(&mesh)?;
-    let traits = if cfg.use_graph_vertices {
-        TreeTraits {
-            graph_vertices: Some(skeleton(&params, cfg.lod)?.graph_vertices() as f64),
-            ..TreeTraits::default()
+/// Scores genomes: the reference, one impostor per rayon thread, the settings.
+struct Evaluator {
+    reference: TreeReference,
+    impostors: Vec<Mutex<TreeImpostor>>,
+    cfg: TreeFitConfig,
+}
+
+impl Evaluator {
+    /// The parameters of a genome, with `seed` (if any) in place of its seed gene.
+    fn params(genome: &[f64], seed: Option<u32>) -> Result<Vec<f64>, TreeError> {
+        let mut params = genome_to_params(TreeGenerator.params(), genome)?;
+        if let Some(s) = seed {
+            params[idx::SEED] = f64::from(s);
         }
-    } else {
-        TreeTraits::default()
-    };
-    reference.similarity(&labels, &traits)
+        Ok(params)
+    }
+
+    fn label_image(&self, params: &[f64]) -> Result<LabelImage, TreeError> {
+        let slots = self.impostors.len();
+        let slot = rayon::current_thread_index().map_or(slots - 1, |i| i.min(slots - 2));
+        let mut imp = self.impostors[slot]
+            .lock()
+            .map_err(|_| TreeError("an impostor renderer was poisoned".into()))?;
+        let mesh = TreeGenerator.generate(params, self.cfg.lod)?;
+        imp.render(&mesh)
+    }
+
+    /// Tree similarity of the genome's impostor to the reference (0 when it cannot be built).
+    fn fitness(&self, genome: &[f64], seed: Option<u32>) -> f64 {
+        let run = || -> Result<f64, TreeError> {
+            let params = Self::params(genome, seed)?;
+            let labels = self.label_image(&params)?;
+            let traits = if self.cfg.use_graph_vertices {
+                TreeTraits {
+                    graph_vertices: Some(skeleton(&params, self.cfg.lod)?.graph_vertices() as f64),
+                    ..TreeTraits::default()
+                }
+            } else {
+                TreeTraits::default()
+            };
+            self.reference.similarity(&labels, &traits)
+        };
+        run().unwrap_or(0.0)
+    }
+}
+
+/// Where a [`TreeSession`] stands.
+#[derive(Clone, Debug)]
+pub struct TreeProgress {
+    /// 1 the GA, 2 the seed trials, 3 the local search.
+    pub stage: u8,
+    /// Generations run so far over all elementary GAs.
+    pub generation: usize,
+    /// Fitness evaluations so far.
+    pub evaluations: usize,
+    /// Evaluations the whole fit makes ([`TreeFitConfig::evaluations`]).
+    pub total_evaluations: usize,
+    /// Best similarity so far (0 before anything was evaluated).
+    pub best_similarity: f64,
+    /// Parameters of the best tree so far (the generator's defaults before any).
+    pub best_params: Vec<f64>,
+    /// The best tree's label image through the fit's view, when it changed in this step.
+    pub preview: Option<LabelImage>,
+    /// Whether the fit is over.
+    pub done: bool,
+}
+
+/// A resumable tree fit: [`TreeSession::step`] does one bounded batch of work (one GA
+/// generation, the seed trials, or one round of the local search) and reports progress, so a
+/// page can show it and cancel by not stepping. Deterministic for `cfg.ga.seed` on any number
+/// of threads, however it is stepped; [`fit_tree`] steps it to the end.
+pub struct TreeSession {
+    eval: Evaluator,
+    ga: TreeGa,
+    stage: u8,
+    /// The seed in use after the seed trials (else `cfg.fixed_seed`).
+    seed: Option<u32>,
+    best: Individual,
+    evaluations: usize,
+    polish_done: usize,
+    rng: Rng,
+    /// Similarity of the last preview sent.
+    previewed: f64,
+}
+
+impl TreeSession {
+    /// Starts a fit to a reference label image seen through `view`. `mutation` is Algorithm
+    /// 3's statistics, or `None` for plain Gaussian mutation. Errors on a reference the
+    /// similarity cannot use (no tree, no leaves, no branches), a size other than the view's,
+    /// or bad settings; nothing is evaluated yet.
+    pub fn new(
+        reference: &LabelImage,
+        traits: TreeTraits,
+        view: View,
+        cfg: &TreeFitConfig,
+        mutation: Option<&MutationStats>,
+    ) -> Result<TreeSession, TreeError> {
+        if (reference.width(), reference.height()) != (view.width, view.height) {
+            return Err(TreeError(format!(
+                "reference is {}×{}, the view {}×{}",
+                reference.width(),
+                reference.height(),
+                view.width,
+                view.height
+            )));
+        }
+        if cfg.use_graph_vertices && traits.graph_vertices.is_none() {
+            return Err(TreeError(
+                "weighing in the branch graph needs the reference's vertex count".into(),
+            ));
+        }
+        if cfg.polish > 1_000_000 || cfg.seed_trials > 1000 {
+            return Err(TreeError(format!(
+                "{} seed trials and {} local-search evaluations: at most 1000 and 1000000",
+                cfg.seed_trials, cfg.polish
+            )));
+        }
+        let reference = TreeReference::new(reference, traits, cfg.similarity)?;
+        // One impostor per rayon worker (and one for the calling thread): each is locked only
+        // by its own thread, so the locks never wait.
+        let slots = rayon::current_num_threads() + 1;
+        let impostors = (0..slots)
+            .map(|_| TreeImpostor::new(view).map(Mutex::new))
+            .collect::<Result<_, _>>()?;
+        let g = TreeGenerator;
+        let start: Vec<Vec<f64>> = if cfg.start_from_presets {
+            g.presets()
+                .iter()
+                .map(|p| params_to_genome(g.params(), &p.values))
+                .collect::<Result<_, _>>()?
+        } else {
+            Vec::new()
+        };
+        let n = g.params().len();
+        let ga = match mutation {
+            Some(stats) => TreeGa::new(n, &cfg.ga, Mutation::Quality(stats), &start)?,
+            None => TreeGa::new(n, &cfg.ga, Mutation::Gaussian, &start)?,
+        };
+        let defaults = params_to_genome(g.params(), &g.defaults())?;
+        Ok(TreeSession {
+            eval: Evaluator {
+                reference,
+                impostors,
+                cfg: *cfg,
+            },
+            ga,
+            stage: 1,
+            seed: cfg.fixed_seed,
+            best: Individual {
+                genome: defaults,
+                fitness: 0.0,
+            },
+            evaluations: 0,
+            polish_done: 0,
+            rng: Rng::new(cfg.ga.seed ^ 0x9E37_79B9_7F4A_7C15),
+            previewed: -1.0,
+        })
+    }
+
+    /// Whether the fit is over.
+    pub fn done(&self) -> bool {
+        self.stage > 3
+    }
+
+    /// One bounded batch of work; returns where the fit stands (a no-op once done).
+    pub fn step(&mut self) -> TreeProgress {
+        match self.stage {
+            1 => {
+                let (eval, seed) = (&self.eval, self.seed);
+                let over = self.ga.step(&|g: &[f64]| eval.fitness(g, seed));
+                if let Some(b) = self.ga.best()
+                    && b.fitness > self.best.fitness
+                {
+                    self.best = b.clone();
+                }
+                self.evaluations = self.ga.evaluations();
+                if over {
+                    self.stage = 2;
+                }
+            }
+            2 => {
+                self.seed_trials();
+                self.stage = 3;
+            }
+            3 => {
+                if self.polish_done >= self.eval.cfg.polish {
+                    self.stage = 4;
+                } else {
+                    self.polish_round();
+                    if self.polish_done >= self.eval.cfg.polish {
+                        self.stage = 4;
+                    }
+                }
+            }
+            _ => {}
+        }
+        self.progress()
+    }
+
+    /// The best genome with seeds 0, 1, … (when the GA ran with a fixed seed); the best seed
+    /// is kept for the local search and the result.
+    fn seed_trials(&mut self) {
+        let trials = self.eval.cfg.seed_trials;
+        if trials == 0 || self.best.fitness <= 0.0 {
+            return;
+        }
+        let eval = &self.eval;
+        let genome = &self.best.genome;
+        let scores: Vec<f64> = (0..trials as u32)
+            .into_par_iter()
+            .map(|s| eval.fitness(genome, Some(s)))
+            .collect();
+        self.evaluations += trials;
+        // The GA's own seed competes too: a trial must beat it.
+        let mut best = (self.seed, self.best.fitness);
+        for (s, &v) in scores.iter().enumerate() {
+            if v > best.1 {
+                best = (Some(s as u32), v);
+            }
+        }
+        self.seed = best.0;
+        self.best.fitness = best.1;
+    }
+
+    /// One round of the local search around the best genome.
+    fn polish_round(&mut self) {
+        let n = self.best.genome.len();
+        let batch: Vec<Vec<f64>> = (0..POLISH_BATCH)
+            .map(|_| {
+                let mut g = self.best.genome.clone();
+                let k = 1 + self.rng.below(3);
+                for i in self.rng.choose(n, k) {
+                    g[i] = (g[i] + 0.05 * self.rng.normal()).clamp(0.0, 1.0);
+                }
+                g
+            })
+            .collect();
+        let (eval, seed) = (&self.eval, self.seed);
+        let scores: Vec<f64> = batch.par_iter().map(|g| eval.fitness(g, seed)).collect();
+        self.evaluations += batch.len();
+        self.polish_done += batch.len();
+        // First best wins ties, so the order (not the thread timing) decides.
+        if let Some((i, &v)) =
+            scores
+                .iter()
+                .enumerate()
+                .fold(None, |acc: Option<(usize, &f64)>, (i, v)| match acc {
+                    Some((_, b)) if *b >= *v => acc,
+                    _ => Some((i, v)),
+                })
+            && v > self.best.fitness
+        {
+            self.best = Individual {
+                genome: batch[i].clone(),
+                fitness: v,
+            };
+        }
+    }
+
+    fn best_params(&self) -> Vec<f64> {
+        Evaluator::params(&self.best.genome, self.seed).unwrap_or_else(|_| TreeGenerator.defaults())
+    }
+
+    fn progress(&mut self) -> TreeProgress {
+        let params = self.best_params();
+        let preview = if self.best.fitness != self.previewed {
+            self.previewed = self.best.fitness;
+            self.eval.label_image(&params).ok()
+        } else {
+            None
+        };
+        TreeProgress {
+            stage: self.stage.min(3),
+            generation: self.ga.generations(),
+            evaluations: self.evaluations,
+            total_evaluations: self.eval.cfg.evaluations(),
+            best_similarity: self.best.fitness,
+            best_params: params,
+            preview,
+            done: self.done(),
+        }
+    }
+
+    /// The best tree so far (the result once done).
+    pub fn result(&self) -> Result<TreeFit, TreeError> {
+        let mut ga = self.ga.result()?;
+        let params = self.best_params();
+        let mut genome = self.best.genome.clone();
+        if let Some(s) = self.seed {
+            // The seed is a whole number: this gene maps back to exactly `s`.
+            let spec = &TreeGenerator.params()[idx::SEED];
+            genome[idx::SEED] = (f64::from(s) - spec.min) / (spec.max - spec.min);
+        }
+        ga.best = Individual {
+            genome,
+            fitness: self.best.fitness,
+        };
+        ga.evaluations = self.evaluations;
+        Ok(TreeFit {
+            params,
+            similarity: self.best.fitness,
+            ga,
+        })
+    }
 }
 
 /// Fits the tree generator to a reference label image seen through `view` (paper §3.5): the
-/// tree-structured GA maximises the tree similarity of generated impostors. `mutation` is
-/// Algorithm 3's statistics, or `None` for plain Gaussian mutation. Deterministic for
-/// `cfg.ga.seed` on any number of threads.
+/// tree-structured GA maximises the tree similarity of generated impostors, then the seed
+/// trials and a local search refine its best genome ([`TreeSession`] run to the end).
+/// `mutation` is Algorithm 3's statistics, or `None` for plain Gaussian mutation.
+/// Deterministic for `cfg.ga.seed` on any number of threads.
 pub fn fit_tree(
     reference: &LabelImage,
     traits: TreeTraits,
     view: View,
     cfg: &TreeFitConfig,
-    mutation: Option<&super::mutation::MutationStats>,
+    mutation: Option<&MutationStats>,
 ) -> Result<TreeFit, TreeError> {
-    if (reference.width(), reference.height()) != (view.width, view.height) {
-        return Err(TreeError(format!(
-            "reference is {}×{}, the view {}×{}",
-            reference.width(),
-            reference.height(),
-            view.width,
-            view.height
-        )));
+    let mut session = TreeSession::new(reference, traits, view, cfg, mutation)?;
+    while !session.done() {
+        session.step();
     }
-    if cfg.use_graph_vertices && traits.graph_vertices.is_none() {
-        return Err(TreeError(
-            "weighing in the branch graph needs the reference's vertex count".into(),
-        ));
-    }
-    let reference = TreeReference::new(reference, traits, cfg.similarity)?;
-    // One impostor per rayon worker (and one for the calling thread): each is locked only by
-    // its own thread, so the locks never wait.
-    let slots = rayon::current_num_threads() + 1;
-    let impostors: Vec<Mutex<TreeImpostor>> = (0..slots)
-        .map(|_| TreeImpostor::new(view).map(Mutex::new))
-        .collect::<Result<_, _>>()?;
-    let f = |genome: &[f64]| -> f64 {
-        let slot = rayon::current_thread_index().map_or(slots - 1, |i| i.min(slots - 2));
-        let Ok(mut imp) = impostors[slot].lock() else {
-            return 0.0;
-        };
-        fitness(genome, &reference, &mut imp, cfg).unwrap_or(0.0)
-    };
-    let n = TreeGenerator.params().len();
-    let ga = match mutation {
-        Some(stats) => tree_ga(n, &f, &cfg.ga, Mutation::Quality(stats))?,
-        None => tree_ga(n, &f, &cfg.ga, Mutation::Gaussian)?,
-    };
-    let params = genome_to_params(TreeGenerator.params(), &ga.best.genome)?;
-    Ok(TreeFit {
-        params,
-        similarity: ga.best.fitness,
-        ga,
-    })
+    session.result()
 }
 
-/// Average silhouette IoU of two tree meshes over 64 turntable views (azimuths `2πi/64`,
-/// framed by [`tree_view`] for a tree `tree_height` tall), the paper's evaluation metric
-/// (Table 2). Leaf cards and tubes together form the silhouette; IoU is soft
-/// (`Σ min / Σ max` of the anti-aliased coverages, [`crate::loss::iou`]).
-pub fn silhouette_iou64(a: &Mesh, b: &Mesh, size: u32, tree_height: f64) -> Result<f64, TreeError> {
-    let base = tree_view(size, size, tree_height)?;
-    let target = base.pose.position - DVec3::new(0.0, 0.5 * tree_height, 0.0);
-    let distance = target.length();
-    let mut renderer = Renderer::new(size, size)?;
-    let ta = Topology::new(&a.triangles, a.positions.len())?;
-    let tb = Topology::new(&b.triangles, b.positions.len())?;
-    let mut sum = 0.0;
-    for i in 0..64 {
-        let az = std::f64::consts::TAU * f64::from(i) / 64.0;
-        let view = View::turntable(
-            size,
-            size,
-            az,
-            distance,
-            base.params.fov_y,
-            DVec3::new(0.0, 0.5 * tree_height, 0.0),
-        )?;
-        let ca = renderer.forward(&ta, &a.positions, &view)?.to_vec();
-        let cb = renderer.forward(&tb, &b.positions, &view)?;
-        let mask = crate::mask::Mask::new(size, size, cb.to_vec())?;
-        sum += crate::loss::iou(&ca, &mask).map_err(|e| TreeError(e.to_string()))?;
+/// Side of the square reference a photo is framed into for a fit ([`start_photo_fit`]).
+pub const PHOTO_FIT_SIZE: u32 = 128;
+
+/// A fit of a photo's tree: the session and where the photo went (for its camera).
+pub struct PhotoTreeFit {
+    /// The fit; step it to the end.
+    pub session: TreeSession,
+    /// The photo's framing; [`Framing::photo_view`] is the photo's camera for the result.
+    pub framing: Framing,
+}
+
+/// Starts the fit of a photo's (or label image's) tree, as the CLI and the page run it:
+/// framed into [`PHOTO_FIT_SIZE`]², seen by [`tree_view`]`(…, 12.0)`, default settings with
+/// Algorithm 3 mutation, the GA seeded by `seed` and, when `budget` is given, about that many
+/// GA evaluations ([`GaConfig::generations_for`]). Errors, in words, on labels without a tree,
+/// without leaves or without branches.
+pub fn start_photo_fit(
+    labels: &LabelImage,
+    seed: u64,
+    budget: Option<usize>,
+) -> Result<PhotoTreeFit, TreeError> {
+    let (reference, framing) = frame_reference_with(labels, PHOTO_FIT_SIZE)?;
+    let view = tree_view(PHOTO_FIT_SIZE, PHOTO_FIT_SIZE, 12.0)?;
+    let mut cfg = TreeFitConfig::default();
+    cfg.ga.seed = seed;
+    if let Some(b) = budget {
+        cfg.ga.generations = cfg.ga.generations_for(b);
     }
-    Ok(sum / 64.0)
+    let stats = MutationStats::tree()?;
+    let session = TreeSession::new(&reference, TreeTraits::default(), view, &cfg, Some(&stats))?;
+    Ok(PhotoTreeFit { session, framing })
+}
+
+/// The paper's evaluation metric (Table 2; notes "Evaluation as they did it"): the mean soft
+/// silhouette IoU (`Σ min / Σ max` of the anti-aliased coverages) of two tree meshes over 64
+/// turntable views (azimuth `2πi/64`, distance 3, vertical field of view 0.5 rad), rendered at
+/// `size × size`, after normalising **each** mesh to its own bounding box (centre at the
+/// origin, longest side 1; [`crate::reconstruct::eval::iou64`]).
+///
+/// The normalisation makes the metric blind to absolute size and placement: a fit from one
+/// photo has no scale, so only the tree's proportions and outline count. Leaf cards and tubes
+/// together form the silhouette. Errors on a mesh without vertices or extent, or a size
+/// outside the renderer's range.
+pub fn silhouette_iou64(a: &Mesh, b: &Mesh, size: u32) -> Result<f64, TreeError> {
+    crate::reconstruct::eval::iou64(
+        (&a.positions, &a.triangles),
+        (&b.positions, &b.triangles),
+        size,
+    )
+    .map_err(|e| TreeError(e.0))
+}
+
+/// How [`frame_reference_with`] placed a photo's tree in the square reference image: photo
+/// pixel `(px, py)` lands at `(size/2 + (px − foot.0)·scale, 0.9·size + (py − foot.1)·scale)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Framing {
+    /// Side of the square reference image.
+    pub size: u32,
+    /// Width and height of the photo (or label image) it came from.
+    pub source: (u32, u32),
+    /// The tree's foot in the photo: the middle of the lowest tree row, and that row's bottom
+    /// edge (pixels).
+    pub foot: (f64, f64),
+    /// Reference pixels per photo pixel.
+    pub scale: f64,
+}
+
+impl Framing {
+    /// The camera of the photo: the view [`tree_view`]`(size, size, 12.0)` that the fit sees,
+    /// widened or narrowed to the photo's field of view and moved parallel to its image plane
+    /// so that the photo's centre is on its axis. Points on the plane through the trunk
+    /// (`z = 0`) project onto the photo exactly where the reference put them; points in
+    /// front of or behind it are off by their depth over the camera distance (a few per cent
+    /// for a crown). glTF cameras have no principal-point offset, hence the shift.
+    pub fn photo_view(&self) -> Result<View, TreeError> {
+        let base = tree_view(self.size, self.size, 12.0)?;
+        let n = f64::from(self.size);
+        let (w, h) = (f64::from(self.source.0), f64::from(self.source.1));
+        // The photo's rectangle in reference pixels.
+        let x0 = 0.5 * n - self.foot.0 * self.scale;
+        let y0 = 0.9 * n - self.foot.1 * self.scale;
+        let (cx, cy) = (x0 + 0.5 * w * self.scale, y0 + 0.5 * h * self.scale);
+        let half = (0.5 * base.params.fov_y).tan();
+        let f = 0.5 * n / half;
+        // Distance from the camera to the plane z = 0 along its axis.
+        let target = DVec3::new(0.0, 6.0, 0.0);
+        let depth = (base.pose.position - target).length();
+        let right = base.pose.rotation.x_axis;
+        let up = base.pose.rotation.y_axis;
+        let shift = right * ((cx - 0.5 * n) * depth / f) - up * ((cy - 0.5 * n) * depth / f);
+        let fov_y = 2.0 * (half * h * self.scale / n).atan();
+        let mut view = base;
+        view.width = self.source.0;
+        view.height = self.source.1;
+        view.pose.position += shift;
+        view.params.fov_y = fov_y;
+        view.params.validate()?;
+        Ok(view)
+    }
+}
+
+/// [`frame_reference_with`] without the framing.
+pub fn frame_reference(labels: &LabelImage, size: u32) -> Result<LabelImage, TreeError> {
+    Ok(frame_reference_with(labels, size)?.0)
 }
 
 /// Resamples a reference label image to `size × size` so that its tree sits where
 /// [`tree_view`]`(size, size, 12.0)` puts a generated tree 12 units tall: the lowest tree pixels'
 /// centre column at the image centre, the tree's top at 10 % and its foot at 90 % of the image
 /// height (nearest neighbour, aspect kept). A photo has no scale, so this fixes it; the fit
-/// then finds the tree's proportions, not its size in metres. Errors on an image without tree
-/// pixels or a size outside 8..=4096.
-pub fn frame_reference(labels: &LabelImage, size: u32) -> Result<LabelImage, TreeError> {
+/// then finds the tree's proportions, not its size in metres. Also returns where the photo
+/// went ([`Framing`], for the photo's camera). Errors on an image without tree pixels or a
+/// size outside 8..=4096.
+pub fn frame_reference_with(
+    labels: &LabelImage,
+    size: u32,
+) -> Result<(LabelImage, Framing), TreeError> {
     if !(8..=4096).contains(&size) {
         return Err(TreeError(format!("frame size {size} is not in 8..=4096")));
     }
@@ -319,5 +680,11 @@ pub fn frame_reference(labels: &LabelImage, size: u32) -> Result<LabelImage, Tre
             out[y * size as usize + x] = px[sy as usize * w + sx as usize];
         }
     }
-    Ok(LabelImage::new(size, size, out)?)
+    let framing = Framing {
+        size,
+        source: (labels.width(), labels.height()),
+        foot: (foot_x, (bottom + 1) as f64),
+        scale,
+    };
+    Ok((LabelImage::new(size, size, out)?, framing))
 }

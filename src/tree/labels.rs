@@ -131,6 +131,32 @@ pub fn labels_from_values(
     LabelImage::new(width, height, values)
 }
 
+/// Restricts colour labels to an object mask given as 8-bit codes, one a pixel, as the page's
+/// mask step makes them: 0 background (label cleared), 128 don't care
+/// ([`LabelImage::DONT_CARE`]), anything else object (label kept). Errors on a code count
+/// other than the pixel count.
+pub fn apply_mask_codes(labels: &LabelImage, codes: &[u8]) -> Result<LabelImage, MaskError> {
+    if codes.len() != labels.labels().len() {
+        return Err(MaskError(format!(
+            "{} mask codes for a {}×{} image",
+            codes.len(),
+            labels.width(),
+            labels.height()
+        )));
+    }
+    let values = labels
+        .labels()
+        .iter()
+        .zip(codes)
+        .map(|(&l, &c)| match c {
+            0 => BACKGROUND,
+            128 => LabelImage::DONT_CARE,
+            _ => l,
+        })
+        .collect();
+    LabelImage::new(labels.width(), labels.height(), values)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -161,5 +187,13 @@ mod tests {
         assert!(labels_from_values(2, 1, vec![0, 3]).is_err());
         let l = labels_from_rgb(2, 1, &[40, 120, 30, 255, 40, 120, 30, 0], 4, &t).unwrap();
         assert_eq!(l.labels(), &[LEAF, BACKGROUND]);
+        assert!(apply_mask_codes(&l, &[255]).is_err());
+    }
+
+    #[test]
+    fn mask_codes_restrict_labels() {
+        let l = labels_from_values(4, 1, vec![LEAF, BRANCH, LEAF, LEAF]).unwrap();
+        let m = apply_mask_codes(&l, &[255, 0, 128, 200]).unwrap();
+        assert_eq!(m.labels(), &[LEAF, BACKGROUND, LabelImage::DONT_CARE, LEAF]);
     }
 }

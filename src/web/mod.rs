@@ -10,9 +10,11 @@ use wasm_bindgen::prelude::*;
 
 mod fit;
 mod mask;
+mod tree;
 
 pub use fit::FitSession;
 pub use mask::MaskSession;
+pub use tree::{TreeFitSession, tree_labels};
 
 #[cfg(feature = "threads")]
 pub use wasm_bindgen_rayon::init_thread_pool;

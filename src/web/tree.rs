@@ -1,0 +1,198 @@
+//! The tree fit's edge: a [`TreeFitSession`] is an opaque handle around the core's resumable
+//! tree fit ([`crate::tree::impostor::TreeSession`], paper §3.5), stepped by the worker in
+//! slices like [`super::FitSession`]; cancelling is not stepping any more.
+//!
+//! The JavaScript API (all numbers plain, arrays typed):
+//!
+//! ```js
+//! // A photo: RGBA bytes (width × height × 4), labelled by colour (green → leaf, brown/grey →
+//! // branch); `codes` is the mask step's output (0 background, 128 don't care, else object;
+//! // one byte a pixel) or an empty array to label the whole photo. `budget`: GA evaluations,
+//! // 0 for the default (≈ 4 700).
+//! const fit = new TreeFitSession(width, height, rgba, codes, seed, budget);
+//! // Or a label image: 0 background, 1 branch, 2 leaf, 255 don't care.
+//! const fit = TreeFitSession.fromLabels(width, height, labels, seed, budget);
+//! // Both throw an Error with a sentence for a mask with no tree, no leaves or no branches.
+//! const p = fit.step(); // one GA generation (or the seed trials, or a local-search round)
+//! // p = { stage: 1 | 2 | 3, generation, evaluations, total_evaluations,
+//! //       best_similarity, params: number[], done }
+//! if (fit.previewWidth() > 0) {            // the best tree's labels changed in this step
+//!   const labels = fit.previewLabels();    // Uint8Array, previewWidth × previewHeight (128²)
+//! }
+//! const labels = treeLabels(width, height, rgba, codes); // the same labels, for a preview
+//! const r = fit.result(); // { generator: "tree", params, lod, seed, similarity, evaluations,
+//! //                          cameras: Float32Array-able number[18] (yfov, aspect, 16 floats
+//! //                          camera-to-world, column-major): the photo's camera for generateGlb }
+//! ```
+//!
+//! Deterministic for a seed. The preview is in the fit's square frame (the photo's tree
+//! scaled to 80 % of its height, foot at the bottom centre), not the photo's.
+
+use crate::mask::LabelImage;
+use crate::tree::impostor::{Framing, PhotoTreeFit, TreeSession, start_photo_fit};
+use crate::tree::labels::{ColorThresholds, apply_mask_codes, labels_from_rgb, labels_from_values};
+use wasm_bindgen::prelude::*;
+
+fn js(e: impl std::fmt::Display) -> JsError {
+    JsError::new(&e.to_string())
+}
+
+/// A tree fit in progress.
+#[wasm_bindgen]
+pub struct TreeFitSession {
+    session: TreeSession,
+    framing: Framing,
+    seed: u32,
+    preview: Option<LabelImage>,
+}
+
+#[derive(serde::Serialize)]
+struct StepOut {
+    stage: u8,
+    generation: usize,
+    evaluations: usize,
+    total_evaluations: usize,
+    best_similarity: f64,
+    params: Vec<f64>,
+    done: bool,
+}
+
+#[derive(serde::Serialize)]
+struct ResultOut {
+    generator: &'static str,
+    params: Vec<f64>,
+    lod: u8,
+    seed: u32,
+    similarity: f64,
+    evaluations: usize,
+    cameras: Vec<f32>,
+}
+
+fn budget_of(budget: u32) -> Result<Option<usize>, JsError> {
+    match budget {
+        0 => Ok(None),
+        b if b > 200_000 => Err(JsError::new("a tree fit budget above 200000 evaluations")),
+        b => Ok(Some(b as usize)),
+    }
+}
+
+impl TreeFitSession {
+    fn start(labels: &LabelImage, seed: u32, budget: u32) -> Result<TreeFitSession, JsError> {
+        let PhotoTreeFit { session, framing } =
+            start_photo_fit(labels, u64::from(seed), budget_of(budget)?).map_err(js)?;
+        Ok(TreeFitSession {
+            session,
+            framing,
+            seed,
+            preview: None,
+        })
+    }
+}
+
+/// The labels a tree fit of this photo would use (see [`TreeFitSession::new`]): 0 background,
+/// 1 branch, 2 leaf, 255 don't care, row-major; for the page's preview over the photo.
+#[wasm_bindgen(js_name = treeLabels)]
+pub fn tree_labels(width: u32, height: u32, rgba: &[u8], codes: &[u8]) -> Result<Vec<u8>, JsError> {
+    let labels =
+        labels_from_rgb(width, height, rgba, 4, &ColorThresholds::default()).map_err(js)?;
+    let labels = if codes.is_empty() {
+        labels
+    } else {
+        apply_mask_codes(&labels, codes).map_err(js)?
+    };
+    Ok(labels.labels().to_vec())
+}
+
+#[wasm_bindgen]
+impl TreeFitSession {
+    /// Starts a fit to a photo (see the module doc); nothing is evaluated yet.
+    #[wasm_bindgen(constructor)]
+    pub fn new(
+        width: u32,
+        height: u32,
+        rgba: &[u8],
+        codes: &[u8],
+        seed: u32,
+        budget: u32,
+    ) -> Result<TreeFitSession, JsError> {
+        let labels =
+            labels_from_rgb(width, height, rgba, 4, &ColorThresholds::default()).map_err(js)?;
+        let labels = if codes.is_empty() {
+            labels
+        } else {
+            apply_mask_codes(&labels, codes).map_err(js)?
+        };
+        TreeFitSession::start(&labels, seed, budget)
+    }
+
+    /// Starts a fit to a label image (0 background, 1 branch, 2 leaf, 255 don't care).
+    #[wasm_bindgen(js_name = fromLabels)]
+    pub fn from_labels(
+        width: u32,
+        height: u32,
+        labels: &[u8],
+        seed: u32,
+        budget: u32,
+    ) -> Result<TreeFitSession, JsError> {
+        let labels = labels_from_values(width, height, labels.to_vec()).map_err(js)?;
+        TreeFitSession::start(&labels, seed, budget)
+    }
+
+    /// One bounded slice of work; returns where the fit stands.
+    pub fn step(&mut self) -> Result<JsValue, JsError> {
+        let p = self.session.step();
+        self.preview = p.preview;
+        let out = StepOut {
+            stage: p.stage,
+            generation: p.generation,
+            evaluations: p.evaluations,
+            total_evaluations: p.total_evaluations,
+            best_similarity: p.best_similarity,
+            params: p.best_params,
+            done: p.done,
+        };
+        serde_wasm_bindgen::to_value(&out).map_err(js)
+    }
+
+    /// Width of the preview of the last step (0 when it brought none).
+    #[wasm_bindgen(js_name = previewWidth)]
+    pub fn preview_width(&self) -> u32 {
+        self.preview.as_ref().map_or(0, LabelImage::width)
+    }
+
+    /// Height of the preview of the last step (0 when it brought none).
+    #[wasm_bindgen(js_name = previewHeight)]
+    pub fn preview_height(&self) -> u32 {
+        self.preview.as_ref().map_or(0, LabelImage::height)
+    }
+
+    /// The best tree's label image (0 background, 1 branch, 2 leaf), row-major; empty when the
+    /// last step brought none.
+    #[wasm_bindgen(js_name = previewLabels)]
+    pub fn preview_labels(&self) -> Vec<u8> {
+        self.preview
+            .as_ref()
+            .map_or_else(Vec::new, |p| p.labels().to_vec())
+    }
+
+    /// The best tree so far (the result once done) and the photo's camera.
+    pub fn result(&self) -> Result<JsValue, JsError> {
+        let fit = self.session.result().map_err(js)?;
+        let view = self.framing.photo_view().map_err(js)?;
+        let c = crate::reconstruct::export_camera(&view, None);
+        let mut cameras = Vec::with_capacity(super::CAMERA_FLOATS);
+        cameras.push(c.yfov);
+        cameras.push(c.aspect);
+        cameras.extend_from_slice(&c.camera_to_world);
+        let out = ResultOut {
+            generator: "tree",
+            params: fit.params,
+            lod: crate::generators::Lod::High as u8,
+            seed: self.seed,
+            similarity: fit.similarity,
+            evaluations: fit.ga.evaluations,
+            cameras,
+        };
+        serde_wasm_bindgen::to_value(&out).map_err(js)
+    }
+}

@@ -1,0 +1,162 @@
+//! `procfit reconstruct --generator tree` as a user runs it: a photo in, a GLB with the
+//! photo's camera and a params JSON out, progress on stderr; bad masks end in one line.
+
+use procfit::generators::tree::{TreeGenerator, idx};
+use procfit::generators::{Generator, Lod, Mesh};
+use procfit::tree::impostor::{TreeImpostor, tree_view};
+use procfit::tree::{BRANCH, LEAF};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn procfit(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_procfit"))
+        .args(args)
+        .output()
+        .expect("runs")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("procfit-tree-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    dir.join(name)
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("utf-8 path")
+}
+
+const W: u32 = 120;
+const H: u32 = 150;
+
+/// Label image of a non-preset tree seen through a camera unlike the fit's (a narrower image,
+/// the tree smaller in it).
+fn truth_labels() -> Vec<u8> {
+    let mut truth = TreeGenerator.preset("oak").expect("oak").values;
+    truth[idx::SEED] = 40.0;
+    truth[idx::HEIGHT] = 11.0;
+    let view = tree_view(W, H, 16.0).expect("view");
+    let mut imp = TreeImpostor::new(view).expect("impostor");
+    imp.render(&TreeGenerator.generate(&truth, Lod::Low).expect("tree"))
+        .expect("renders")
+        .labels()
+        .to_vec()
+}
+
+#[test]
+fn photo_to_glb_with_its_camera() {
+    let labels = truth_labels();
+    let photo = scratch("tree.png");
+    image::RgbImage::from_fn(W, H, |x, y| {
+        image::Rgb(match labels[(y * W + x) as usize] {
+            LEAF => [40, 120, 30],
+            BRANCH => [90, 60, 35],
+            _ => [135, 190, 235],
+        })
+    })
+    .save(&photo)
+    .expect("png");
+    let (glb, params) = (scratch("tree.glb"), scratch("tree.json"));
+    let out = procfit(&[
+        "reconstruct",
+        "--generator",
+        "tree",
+        "--budget",
+        "400",
+        "--seed",
+        "2",
+        s(&photo),
+        "-o",
+        s(&glb),
+        "--params-out",
+        s(&params),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("tree stage 3/3") && err.contains("ETA") && err.contains("similarity"),
+        "progress: {err}"
+    );
+    let doc = procfit::model::Model::from_json(&std::fs::read_to_string(&params).expect("json"))
+        .expect("params");
+    assert_eq!(doc.generator.name(), "tree");
+    let model = procfit::glb::import_glb(&std::fs::read(&glb).expect("glb")).expect("imports");
+    assert_eq!(model.cameras.len(), 1);
+    let cam = &model.cameras[0];
+    assert!((cam.aspect - W as f32 / H as f32).abs() < 1e-6);
+    // The camera re-projects the fitted tree onto the photo's tree.
+    let mat = glam::Mat4::from_cols_array(&cam.camera_to_world).as_dmat4();
+    let view = procfit::camera::View {
+        width: W,
+        height: H,
+        pose: procfit::camera::CameraPose {
+            rotation: glam::DMat3::from_mat4(mat),
+            position: mat.w_axis.truncate(),
+        },
+        params: procfit::camera::ViewParams {
+            fov_y: f64::from(cam.yfov),
+            ..Default::default()
+        },
+    };
+    let mesh = Mesh {
+        positions: model.reference.positions.clone(),
+        triangles: model.reference.triangles.clone(),
+        ..Mesh::default()
+    };
+    let mask = procfit::mask::Mask::new(
+        W,
+        H,
+        labels
+            .iter()
+            .map(|&l| if l == LEAF || l == BRANCH { 1.0 } else { 0.0 })
+            .collect(),
+    )
+    .expect("mask");
+    let iou = procfit::reconstruct::eval::view_iou(&mesh, &view, &mask).expect("iou");
+    println!("input-view IoU {iou:.3}");
+    assert!(iou > 0.5, "input-view IoU {iou}");
+}
+
+#[test]
+fn bad_tree_masks_give_one_line_and_failure() {
+    let check = |name: &str, f: &dyn Fn(u32, u32) -> u8, needle: &str| {
+        let path = scratch(name);
+        image::GrayImage::from_fn(64, 64, |x, y| image::Luma([f(x, y)]))
+            .save(&path)
+            .expect("png");
+        let out = procfit(&[
+            "reconstruct",
+            "--generator",
+            "tree",
+            s(&path),
+            "-o",
+            s(&scratch("x.glb")),
+        ]);
+        let err = String::from_utf8_lossy(&out.stderr).to_string();
+        assert!(!out.status.success(), "{name} should fail");
+        assert_eq!(err.trim_end().lines().count(), 1, "{name}: {err}");
+        assert!(err.contains(needle), "{name}: `{err}` lacks `{needle}`");
+    };
+    let blob = |x: u32, y: u32| x.abs_diff(32) < 12 && y.abs_diff(24) < 12;
+    let trunk = |x: u32, y: u32| x.abs_diff(32) < 2 && y > 30 && y < 60;
+    check("nothing.png", &|_, _| 0, "no tree");
+    check(
+        "leaves.png",
+        &|x, y| if blob(x, y) { LEAF } else { 0 },
+        "no branch",
+    );
+    check(
+        "wood.png",
+        &|x, y| if trunk(x, y) { BRANCH } else { 0 },
+        "no leaf",
+    );
+    let two = procfit(&[
+        "reconstruct",
+        "--generator",
+        "tree",
+        "a.png",
+        "b.png",
+        "-o",
+        "x.glb",
+    ]);
+    assert!(String::from_utf8_lossy(&two.stderr).contains("one image"));
+}
