@@ -28,6 +28,9 @@ pub struct ReconstructArgs {
     /// Stage-1 evaluations (default 5000 × quality; for a tree, the GA's, default 4720).
     #[arg(long)]
     budget: Option<usize>,
+    /// Whole fits from different seeds, the lowest final loss wins (not for trees).
+    #[arg(long, default_value_t = procfit::reconstruct::FitConfig::default().restarts)]
+    restarts: usize,
     /// Quality/speed knob: multiplies every stage's budget.
     #[arg(long, default_value_t = 1.0)]
     quality: f64,
@@ -164,6 +167,7 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
         seed: a.seed,
         quality: a.quality,
         budget: a.budget,
+        restarts: a.restarts,
         fov_y,
         ..FitConfig::default()
     };
@@ -191,8 +195,10 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
                 .collect();
             let _ = write!(
                 stderr,
-                "\r{} stage {}/3 [{bar}] {:>3.0}% {} evals, loss {:.5}, ETA {eta}   ",
+                "\r{} run {}/{} stage {}/3 [{bar}] {:>3.0}% {} evals, loss {:.5}, ETA {eta}   ",
                 p.generator,
+                p.run,
+                p.runs,
                 p.stage,
                 100.0 * frac,
                 p.evaluations,

@@ -3,7 +3,7 @@
 //! the generator did not make, determinism across thread counts, and bad input.
 //!
 //! Thresholds, measured and stated: single view IoU-64 ≥ 0.90 for buildings (as the issue
-//! asks); for dishes ≥ 0.93 on average over five and ≥ 0.84 each — below the issue's 0.95 each,
+//! asks); for dishes ≥ 0.95 on average over five and ≥ 0.86 each — below the issue's 0.95 each,
 //! because from one photo a handle turned towards the camera looks like a shorter handle seen
 //! side-on, a low bowl's height trades against the shape of its underside, and the
 //! bounding-box normalisation of IoU-64 magnifies both; four views ≥ 0.95 and no worse than one.
@@ -62,27 +62,26 @@ fn check_dish(case: u64, handle: bool, views: usize, min_iou: f64) -> f64 {
     iou
 }
 
-/// Five random dishes (three without a handle, two with), one view each: every one ≥ 0.84
-/// and the mean ≥ 0.93. Measured: 0.978, 0.850, 0.990, 0.963, 0.924 (mean 0.941); case 4 is a
-/// low bowl seen from 17° whose height trades against the roundness of its underside, an
-/// ambiguity one silhouette cannot settle (four views do, see below). Stage 1's yaw-turned
-/// seeds (session.rs) lifted the measured mug from 8 cameras from 0.840 to 0.947 and moved
-/// case 4 from 0.922 to 0.850: which of two nearly equal losses wins is chance there.
+/// Five random dishes (three without a handle, two with), one view each: every one ≥ 0.86
+/// and the mean ≥ 0.95. Measured (3 restarts, stage-1 regulariser 0.01): 0.977, 0.878, 0.993,
+/// 0.981, 0.943 (mean 0.954); case 4 is a low bowl seen from 17° whose height trades against
+/// the roundness of its underside, an ambiguity one silhouette cannot settle (four views do,
+/// see below).
 #[test]
 fn single_view_dishes_reach_iou64() {
     use rayon::prelude::*;
     let cases = [(2, false), (4, false), (6, false), (7, true), (9, true)];
     let ious: Vec<f64> = cases
         .par_iter()
-        .map(|&(case, handle)| check_dish(case, handle, 1, 0.84))
+        .map(|&(case, handle)| check_dish(case, handle, 1, 0.86))
         .collect();
     let mean = ious.iter().sum::<f64>() / ious.len() as f64;
-    assert!(mean >= 0.93, "mean IoU-64 {mean:.4} of {ious:?}");
+    assert!(mean >= 0.95, "mean IoU-64 {mean:.4} of {ious:?}");
 }
 
 #[test]
 fn four_views_settle_what_one_cannot() {
-    let one = check_dish(4, false, 1, 0.84);
+    let one = check_dish(4, false, 1, 0.86);
     let four = check_dish(4, false, 4, 0.95);
     assert!(four >= one, "4 views {four:.4} < 1 view {one:.4}");
 }
@@ -351,4 +350,45 @@ fn bad_start_vector_is_refused() {
     nan[0] = f64::NAN;
     check("dish", nan, "start parameters");
     check("auto", x.clone(), "named generator");
+}
+
+/// The table behind [`FitConfig`]'s defaults (not a check: it prints): single-view IoU-64 of
+/// the measured mug from 8 random cameras and of 8 random dishes (even cases with a handle),
+/// at the default settings. Measured with 3 restarts and a stage-1 regulariser of 0.01:
+/// mug mean 0.931, dishes 0.910 — one silhouette leaves a handle's turn and a rim's pinch
+/// ambiguous, and which basin wins varies from case to case.
+#[test]
+#[ignore = "prints a table; takes minutes"]
+fn defaults_table() {
+    let mut rng = Rng::new(2024);
+    let mug = measured_mug();
+    let config = || FitConfig {
+        generator: "dish".into(),
+        fov_y: vec![Some(0.5)],
+        ..FitConfig::default()
+    };
+    let mut mugs = vec![];
+    for _ in 0..8 {
+        let truth = random_view_at(&mut rng, &mug, 0.5, 0.0);
+        let mask = render_mask(&mug, &truth, 512);
+        mugs.push(fit_iou64(&fit(config(), vec![mask]), &mug, &truth));
+    }
+    let mut dishes = vec![];
+    for case in 20..28u64 {
+        let mut rng = Rng::new(case);
+        let x = random_dish(&mut rng, case % 2 == 0);
+        let mesh = mesh_of("dish", &x, Lod::High);
+        let truth = random_view_at(&mut rng, &mesh, 0.5, 0.0);
+        let mask = render_mask(&mesh, &truth, 256);
+        dishes.push(fit_iou64(&fit(config(), vec![mask]), &mesh, &truth));
+    }
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    println!("| set | mean IoU-64 | each |\n|---|---|---|");
+    for (name, v) in [
+        ("measured mug, 8 cameras", &mugs),
+        ("random dishes 20–27", &dishes),
+    ] {
+        let each: Vec<String> = v.iter().map(|x| format!("{x:.3}")).collect();
+        println!("| {name} | {:.3} | {} |", mean(v), each.join(" "));
+    }
 }

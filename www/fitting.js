@@ -52,6 +52,7 @@ export class FitRunner extends EventTarget {
     const t0 = performance.now();
     this.running = { fitId };
     this.curves = { 1: [], 2: [], 3: [] };
+    this.lastRun = undefined;
     this.photo = photos[0];
     this.tree = false;
     if (this.els.caption) this.els.caption.textContent = 'Best outline so far (orange) over photo 1';
@@ -126,7 +127,14 @@ export class FitRunner extends EventTarget {
     const frac = p.work_total > 0 ? Math.min(1, p.work_done / p.work_total) : 0;
     this.els.bar.value = frac;
     const names = this.tree ? TREE_STAGES : STAGES;
-    this.els.stage.textContent = `${names[p.stage] ?? `Stage ${p.stage}`}${p.generator ? ` — ${p.generator}` : ''}`;
+    // A fit makes a few runs from different seeds and keeps the best: say which, and start
+    // each run's curves afresh (the outline shown stays the best finished run's).
+    const tries = p.runs > 1 ? ` (try ${p.run} of ${p.runs})` : '';
+    if (p.run !== undefined && p.run !== this.lastRun) {
+      this.lastRun = p.run;
+      this.curves = { 1: [], 2: [], 3: [] };
+    }
+    this.els.stage.textContent = `${names[p.stage] ?? `Stage ${p.stage}`}${p.generator ? ` — ${p.generator}` : ''}${tries}`;
     const elapsed = (performance.now() - t0) / 1000;
     if (p.done) this.els.eta.textContent = `done in ${elapsed.toFixed(1)} s`;
     else if (frac > 0.02) this.els.eta.textContent = `about ${formatSeconds((elapsed * (1 - frac)) / frac)} left`;

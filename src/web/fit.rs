@@ -31,6 +31,9 @@ struct StepOut {
     /// `null` before anything was evaluated.
     best_loss: Option<f64>,
     params: Vec<f64>,
+    /// The run (1-based) of `runs` (restarts from other seeds; the best one is the result).
+    run: usize,
+    runs: usize,
     done: bool,
 }
 
@@ -173,6 +176,12 @@ impl FitSession {
             fov_y: fov_y.iter().map(|&f| (f != 0.0).then_some(f)).collect(),
             start: (!start.is_empty()).then(|| start.to_vec()),
             windows: windows_of(widths, heights, window_flags, window_codes)?,
+            // "Quick" (quality below ½) is a preview: one run, not the best of several.
+            restarts: if quality < 0.5 {
+                1
+            } else {
+                FitConfig::default().restarts
+            },
             ..FitConfig::default()
         };
         let masks = masks_of(widths, heights, codes)?;
@@ -199,6 +208,8 @@ impl FitSession {
             work_total: p.work_total,
             best_loss: p.best_loss.is_finite().then_some(p.best_loss),
             params: p.params,
+            run: p.run,
+            runs: p.runs,
             done: p.done,
         };
         serde_wasm_bindgen::to_value(&out).map_err(js)
