@@ -3,7 +3,7 @@
 // and a cancel button, and hands the fitted model to the editor. The worker runs the fit in
 // slices, so the page — and the sliders — stay responsive meanwhile.
 import { REQUESTS } from './protocol.js';
-import { fitCodes } from './masking.js';
+import { fitCodes, fitWindows, photoPixels } from './masking.js';
 
 /** What each stage does, in words (see reconstruct::session). */
 export const STAGES = {
@@ -11,6 +11,16 @@ export const STAGES = {
   2: 'Stage 2 of 3: refining the outline',
   3: 'Stage 3 of 3: polishing at full detail',
 };
+
+/** The tree fit's stages (tree::impostor::TreeSession). */
+export const TREE_STAGES = {
+  1: 'Stage 1 of 3: growing trees (genetic search)',
+  2: 'Stage 2 of 3: trying the best trees with other seeds',
+  3: 'Stage 3 of 3: polishing the best tree',
+};
+
+/** Preview colours of tree labels: branch brown, leaf green. */
+const TREE_TINT = { 1: [120, 78, 40, 255], 2: [60, 150, 60, 255] };
 
 let nextFit = 1;
 
@@ -30,15 +40,21 @@ export class FitRunner extends EventTarget {
    */
   async run({ generator, photos, quality, start = null }) {
     if (this.running) throw new Error('a fit is already running');
+    if (generator === 'tree') return this.runTree({ photo: photos[0], quality });
+    // Window labels only mean something to a building fit (or Automatic, which may pick one).
+    const useWindows = generator === 'building' || generator === 'auto';
     const masks = photos.map((p) => {
       const codes = fitCodes(p);
-      return { width: p.mask.width, height: p.mask.height, codes: codes.buffer, focal_35mm: p.focal35mm ?? null };
+      const windows = useWindows ? fitWindows(p) : null;
+      return { width: p.mask.width, height: p.mask.height, codes: codes.buffer, windows: windows?.buffer ?? null, focal_35mm: p.focal35mm ?? null };
     });
     const fitId = nextFit++;
     const t0 = performance.now();
     this.running = { fitId };
     this.curves = { 1: [], 2: [], 3: [] };
     this.photo = photos[0];
+    this.tree = false;
+    if (this.els.caption) this.els.caption.textContent = 'Best outline so far (orange) over photo 1';
     this.els.box.hidden = false;
     this.els.bar.value = 0;
     this.els.stage.textContent = 'Starting…';
@@ -49,7 +65,51 @@ export class FitRunner extends EventTarget {
       const out = await this.client.call(
         REQUESTS.FIT_RUN,
         { fitId, generator, seed: 1, quality, masks, ...(start ? { start } : {}) },
-        { transfer: masks.map((m) => m.codes), onEvent: (event, data) => event === 'progress' && this.progress(data, t0) },
+        { transfer: masks.flatMap((m) => (m.windows ? [m.codes, m.windows] : [m.codes])), onEvent: (event, data) => event === 'progress' && this.progress(data, t0) },
+      );
+      return { ...out, seconds: (performance.now() - t0) / 1000 };
+    } finally {
+      this.running = null;
+    }
+  }
+
+  /**
+   * Fits the tree generator to `photo`'s colours inside its mask (trees fit one photo). Resolves
+   * like run().
+   */
+  async runTree({ photo, quality }) {
+    const { width, height } = photo.mask;
+    const rgba = photoPixels(photo);
+    const codes = fitCodes(photo).buffer;
+    const fitId = nextFit++;
+    const t0 = performance.now();
+    this.running = { fitId };
+    this.curves = { 1: [], 2: [], 3: [] };
+    this.photo = photo;
+    this.tree = true;
+    this.lastTree = null;
+    this.els.box.hidden = false;
+    this.els.bar.value = 0;
+    this.els.stage.textContent = 'Starting…';
+    this.els.eta.textContent = '';
+    if (this.els.caption) this.els.caption.textContent = 'Best tree so far: its branches (brown) and leaves (green)';
+    this.drawPreview(null);
+    this.drawCurve();
+    try {
+      const out = await this.client.call(
+        REQUESTS.TREE_RUN,
+        { fitId, seed: 1, quality, width, height, rgba, codes },
+        {
+          transfer: [rgba, codes],
+          onEvent: (event, data) => {
+            if (event !== 'progress') return;
+            // The same shape as a silhouette fit's progress, so one drawing path serves both.
+            this.progress(
+              { ...data, work_done: data.evaluations, work_total: data.total_evaluations, best_loss: 1 - data.best_similarity, generator: 'tree' },
+              t0,
+            );
+          },
+        },
       );
       return { ...out, seconds: (performance.now() - t0) / 1000 };
     } finally {
@@ -65,7 +125,8 @@ export class FitRunner extends EventTarget {
   progress(p, t0) {
     const frac = p.work_total > 0 ? Math.min(1, p.work_done / p.work_total) : 0;
     this.els.bar.value = frac;
-    this.els.stage.textContent = `${STAGES[p.stage] ?? `Stage ${p.stage}`}${p.generator ? ` — ${p.generator}` : ''}`;
+    const names = this.tree ? TREE_STAGES : STAGES;
+    this.els.stage.textContent = `${names[p.stage] ?? `Stage ${p.stage}`}${p.generator ? ` — ${p.generator}` : ''}`;
     const elapsed = (performance.now() - t0) / 1000;
     if (p.done) this.els.eta.textContent = `done in ${elapsed.toFixed(1)} s`;
     else if (frac > 0.02) this.els.eta.textContent = `about ${formatSeconds((elapsed * (1 - frac)) / frac)} left`;
@@ -89,6 +150,24 @@ export class FitRunner extends EventTarget {
     ctx.drawImage(photo.bitmap, 0, 0, w, h);
     ctx.fillStyle = 'rgba(255,255,255,0.35)';
     ctx.fillRect(0, 0, w, h);
+    if (this.tree) {
+      // The tree's labels are in the fit's own square frame, not the photo's: drawn whole,
+      // centred on white, once one arrives.
+      if (!preview && this.lastTree) preview = this.lastTree;
+      if (!preview) return;
+      this.lastTree = preview;
+      const labels = new Uint8Array(preview.labels);
+      const img = new ImageData(preview.width, preview.height);
+      for (let i = 0; i < labels.length; i += 1) img.data.set(TREE_TINT[labels[i]] ?? [255, 255, 255, 255], 4 * i);
+      const tile = new OffscreenCanvas(preview.width, preview.height);
+      tile.getContext('2d').putImageData(img, 0, 0);
+      ctx.fillStyle = '#fff';
+      ctx.fillRect(0, 0, w, h);
+      const side = Math.min(w, h);
+      ctx.imageSmoothingEnabled = false;
+      ctx.drawImage(tile, (w - side) / 2, (h - side) / 2, side, side);
+      return;
+    }
     if (!preview) return;
     const cov = new Uint8Array(preview.coverage);
     const sil = new OffscreenCanvas(preview.width, preview.height);
@@ -122,6 +201,14 @@ export class FitRunner extends EventTarget {
         ctx.stroke();
       }
       if (ys.length < 1) continue;
+      if (ys.length === 1) {
+        // A stage of one step (the tree fit's seed trials) is a dot, not an empty slot.
+        ctx.fillStyle = colours[s];
+        ctx.beginPath();
+        ctx.arc(x0 + slot / 2, 24 + (H - 32) / 2, 3, 0, 2 * Math.PI);
+        ctx.fill();
+        continue;
+      }
       const lo = Math.min(...ys);
       const hi = Math.max(...ys);
       const span = hi - lo || 1;

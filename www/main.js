@@ -9,7 +9,7 @@ import * as store from './store.js';
 import { CameraCapture } from './camera.js';
 import { Viewer } from './viewer.js';
 import { Editor, LODS } from './editor.js';
-import { MaskEditor, autoMask } from './masking.js';
+import { MaskEditor, autoMask, reviveMask, detectWindows, treeLabels, WINDOW } from './masking.js';
 import { FitRunner } from './fitting.js';
 
 const $ = (id) => document.getElementById(id);
@@ -96,10 +96,15 @@ function addPhoto(photo) {
   persist();
 }
 
-/** Worker sessions for masks the page already has (after a restore or a worker restart). */
+/**
+ * Worker sessions for masks the page already has (after a restore or a worker restart), with
+ * the photo's corrections replayed so the next one builds on them.
+ */
 function reviveMasks() {
   for (const p of state.photos) {
-    if (p.mask) autoMask(client, p, { keep: true }).catch(() => {});
+    if (p.mask) {
+      p.reviving = reviveMask(client, p).catch(() => {});
+    }
   }
 }
 
@@ -202,10 +207,92 @@ async function findMask(photo) {
   persist();
 }
 
+/** The windows tools: shown for buildings, with how much of the building is marked as window. */
+function renderWindowTools() {
+  const photo = state.photos.find((p) => p.id === state.selected);
+  const building = fitGenerator() === 'building';
+  const tools = $('window-tools');
+  tools.hidden = !building || !photo?.mask;
+  if (tools.hidden && ['window', 'wall'].includes(maskEditor.tool)) {
+    document.querySelector('input[name="tool"][value="none"]').checked = true;
+    maskEditor.setTool('none');
+  }
+  if (maskEditor.showWindows !== building) {
+    maskEditor.showWindows = building;
+    maskEditor.draw();
+  }
+  const codes = photo?.windows?.codes;
+  $('windows-clear').disabled = !codes;
+  if (!codes) {
+    $('windows-state').textContent = 'No windows marked yet.';
+    return;
+  }
+  let win = 0;
+  let inside = 0;
+  for (const c of codes) {
+    if (c === WINDOW) win += 1;
+    if (c === 1 || c === WINDOW) inside += 1;
+  }
+  $('windows-state').textContent = win
+    ? `Windows marked in teal: ${Math.round((100 * win) / Math.max(1, inside))} % of the building.`
+    : 'No windows found: paint a few with the windows brush.';
+}
+
+/**
+ * For trees: the branch / leaf labels the fit will see, over the photo, with their shares. They
+ * are made again when the photo or its mask changes.
+ */
+function renderTreeLabels() {
+  const photo = state.photos.find((p) => p.id === state.selected);
+  const tree = fitGenerator() === 'tree';
+  const line = $('tree-state');
+  line.hidden = !tree || !photo?.mask;
+  if (maskEditor.showTree !== tree) {
+    maskEditor.showTree = tree;
+    maskEditor.draw();
+  }
+  if (line.hidden) return;
+  const labels = photo.treeLabels;
+  if (!labels || photo.treeLabelsFor !== photo.mask.codes) {
+    line.textContent = 'Sorting branches from leaves…';
+    const codes = photo.mask.codes;
+    treeLabels(client, photo)
+      .then(() => {
+        photo.treeLabelsFor = codes;
+        photo.treeError = null;
+      })
+      .catch((err) => {
+        photo.treeLabels = null;
+        photo.treeLabelsFor = codes;
+        photo.treeError = err.message;
+      })
+      .finally(() => {
+        if (state.selected !== photo.id) return;
+        maskEditor.draw();
+        renderTreeLabels();
+      });
+    return;
+  }
+  if (photo.treeError) {
+    line.textContent = `The tree fit cannot use this photo: ${photo.treeError}`;
+    return;
+  }
+  let branch = 0;
+  let leaf = 0;
+  for (const l of labels) {
+    if (l === 1) branch += 1;
+    else if (l === 2) leaf += 1;
+  }
+  const all = Math.max(1, branch + leaf);
+  line.textContent = `What the tree fit sees, by colour: branches in brown (${Math.round((100 * branch) / all)} %), leaves in green (${Math.round((100 * leaf) / all)} %). Trees are fitted to one photo, the first.`;
+}
+
 function renderMaskState() {
   const box = $('mask-state');
   const photo = state.photos.find((p) => p.id === state.selected);
   $('mask-tools').hidden = !photo?.mask;
+  renderWindowTools();
+  renderTreeLabels();
   box.dataset.kind = '';
   if (!photo) box.textContent = '';
   else if (photo.maskState === 'working') box.textContent = 'Finding the object…';
@@ -338,6 +425,29 @@ $('mask-auto').addEventListener('click', () => {
   const photo = state.photos.find((p) => p.id === state.selected);
   if (photo) findMask(photo);
 });
+$('windows-auto').addEventListener('click', async () => {
+  const photo = state.photos.find((p) => p.id === state.selected);
+  if (!photo?.mask) return;
+  say(photosMessage, '');
+  $('windows-state').textContent = 'Looking for windows…';
+  try {
+    await photo.reviving;
+    await detectWindows(client, photo);
+  } catch (err) {
+    say(photosMessage, `No windows found: ${err.message}. Paint a few with the windows brush.`);
+  }
+  maskEditor.draw();
+  renderWindowTools();
+  persist();
+});
+$('windows-clear').addEventListener('click', () => {
+  const photo = state.photos.find((p) => p.id === state.selected);
+  if (!photo) return;
+  photo.windows = null;
+  maskEditor.draw();
+  renderWindowTools();
+  persist();
+});
 window.procfit.maskEditor = maskEditor;
 
 $('camera-open').addEventListener('click', () => {
@@ -400,6 +510,11 @@ function buildGeneratorChoices() {
     box.append(el('label', { class: 'choice', for: `gen-${name}` }, [input, ' ', spec ? label : `${label} `, spec ? '' : el('span', { class: 'muted' }, ['(not in this build yet)'])]));
   }
   const auto = el('input', { type: 'radio', name: 'generator', value: 'auto', id: 'gen-auto' });
+  auto.addEventListener('change', () => {
+    renderWindowTools();
+    renderTreeLabels();
+    updateFitButton();
+  });
   box.append(el('label', { class: 'choice', for: 'gen-auto' }, [auto, ' Automatic ', el('span', { class: 'muted' }, ['(the fit picks)'])]));
   for (const spec of state.specs.filter((g) => !KNOWN.some(([n]) => n === g.name))) {
     const input = el('input', { type: 'radio', name: 'generator', value: spec.name, id: `gen-${spec.name}` });
@@ -429,6 +544,8 @@ function chooseGenerator(name, { params = null, lod = null, preset = undefined, 
   state.presetName = preset ?? first?.name ?? null;
   state.editor.open(name, params ?? first?.values ?? null, lod ?? state.editor.lod, cameras);
   $('lod').value = String(state.editor.lod);
+  renderWindowTools();
+  renderTreeLabels();
   updateFitButton();
 }
 
@@ -561,7 +678,7 @@ function setUpModelStep() {
 const fitMessage = $('fit-message');
 const fitter = new FitRunner({
   client,
-  els: { stage: $('fit-stage'), eta: $('fit-eta'), bar: $('fit-bar'), preview: $('fit-preview'), curve: $('fit-curve'), box: $('fit-progress') },
+  els: { stage: $('fit-stage'), eta: $('fit-eta'), bar: $('fit-bar'), preview: $('fit-preview'), curve: $('fit-curve'), box: $('fit-progress'), caption: $('fit-preview-caption') },
 });
 window.procfit.fitter = fitter;
 
@@ -583,7 +700,8 @@ function updateFitButton() {
 $('fit-start').addEventListener('click', () => {
   const generator = fitGenerator();
   const spec = state.specs.find((g) => g.name === generator);
-  if (spec && !spec.differentiable) {
+  // Trees have their own fit (a genetic search over the tree generator, paper §3.5).
+  if (spec && !spec.differentiable && generator !== 'tree') {
     say(fitMessage, `The ${spec.label.toLowerCase()} generator cannot be fitted in this build; choose another or Automatic.`);
     return;
   }

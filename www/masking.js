@@ -1,11 +1,27 @@
 // The mask step: each photo's mask (from the worker's GrabCut session) drawn over the photo,
 // and the tools to correct it — a box around the object, object / background brushes (both
 // re-cut in the worker) and a "don't care" brush (pixels the fit must ignore, kept here and
-// merged into the mask codes when the fit starts).
+// merged into the mask codes when the fit starts). For buildings, window labels: found
+// automatically or from window / wall brushes (labelled in the worker), drawn in teal; for
+// trees, the branch (brown) and leaf (green) labels the tree fit will see.
+//
+// Corrections are kept with the photo (`photo.edits`: the box and strokes since the last
+// automatic mask) so that a worker session made again — after a reload or a worker restart —
+// can replay them; the next correction then builds on all earlier ones.
 import { REQUESTS } from './protocol.js';
 
 /** Overlay colours (RGBA) by mask code: background dimmed, object tinted, unsure in amber. */
-const TINT = { bg: [20, 20, 30, 120], obj: [40, 110, 255, 70], unsure: [255, 190, 0, 150] };
+const TINT = {
+  bg: [20, 20, 30, 120],
+  obj: [40, 110, 255, 70],
+  unsure: [255, 190, 0, 150],
+  window: [0, 215, 190, 170],
+  branch: [150, 90, 40, 200],
+  leaf: [40, 200, 60, 170],
+};
+
+/** Window label codes (segment::windows). */
+export const WINDOW = 2;
 
 /**
  * Asks the worker for `photo`'s automatic mask; stores it on the photo. With `keep`, a mask the
@@ -22,13 +38,82 @@ export async function autoMask(client, photo, { keep = false } = {}) {
     { key: String(photo.id), width: photo.width, height: photo.height, rgba },
     { transfer: [rgba] },
   );
-  if (!(keep && photo.mask)) setMask(photo, m);
+  if (!(keep && photo.mask)) {
+    setMask(photo, m);
+    photo.edits = [];
+  }
   return photo.mask;
+}
+
+/**
+ * Gives `photo` a worker session again and replays its corrections into it (after a reload or
+ * a worker restart). The requests go out back to back, so any correction the person makes
+ * meanwhile queues behind them in the worker. The photo's mask stays as stored (the replay
+ * gives the same one).
+ */
+export async function reviveMask(client, photo) {
+  const auto = autoMask(client, photo, { keep: true });
+  const key = String(photo.id);
+  const replays = (photo.edits ?? []).map((e) =>
+    e.rect
+      ? client.call(REQUESTS.MASK_RECT, { key, rect: e.rect })
+      : client.call(REQUESTS.MASK_STROKE, { key, object: e.object, points: e.points, radius: e.radius }),
+  );
+  await Promise.all([auto, ...replays]);
+}
+
+/** `photo`'s RGBA pixels at its mask's (working) size, as an ArrayBuffer. */
+export function photoPixels(photo) {
+  const { width, height } = photo.mask;
+  const ctx = new OffscreenCanvas(width, height).getContext('2d');
+  ctx.drawImage(photo.bitmap, 0, 0, width, height);
+  return ctx.getImageData(0, 0, width, height).data.buffer;
+}
+
+/** Asks the worker for `photo`'s tree labels (branch / leaf by colour, inside the mask). */
+export async function treeLabels(client, photo) {
+  const rgba = photoPixels(photo);
+  const codes = fitCodes(photo).buffer;
+  const { width, height } = photo.mask;
+  const t = await client.call(REQUESTS.TREE_LABELS, { width, height, rgba, codes }, { transfer: [rgba, codes] });
+  photo.treeLabels = new Uint8Array(t.labels);
+  return photo.treeLabels;
+}
+
+/** The window labels for the fit (0 background, 1 façade, 2 window, 255 don't care), or null. */
+export function fitWindows(photo) {
+  const w = photo.windows;
+  if (!w?.codes || !photo.mask || w.codes.length !== photo.mask.codes.length) return null;
+  const out = w.codes.slice();
+  const { width, height, dontCare } = photo.mask;
+  const paint = dontCare.getContext('2d').getImageData(0, 0, width, height).data;
+  for (let i = 0; i < out.length; i += 1) if (paint[4 * i + 3] > 0) out[i] = 255;
+  return out;
+}
+
+/** Finds windows automatically inside `photo`'s mask; stores and returns them. */
+export async function detectWindows(client, photo) {
+  const w = await client.call(REQUESTS.MASK_WINDOWS_AUTO, { key: String(photo.id) });
+  photo.windows = { codes: new Uint8Array(w.codes), strokes: [] };
+  return photo.windows;
 }
 
 function setMask(photo, m) {
   const dontCare = photo.mask && photo.mask.width === m.width && photo.mask.height === m.height ? photo.mask.dontCare : null;
   photo.mask = { ...m, codes: new Uint8Array(m.codes), dontCare: dontCare ?? blankCanvas(m.width, m.height) };
+}
+
+/** RGBA pixels of a round-capped stroke along `points` (working pixels), for a local brush. */
+function strokePixels(width, height, points, radius) {
+  const ctx = blankCanvas(width, height).getContext('2d');
+  ctx.strokeStyle = '#000';
+  ctx.lineWidth = 2 * radius;
+  ctx.lineCap = ctx.lineJoin = 'round';
+  ctx.beginPath();
+  points.forEach(([x, y], i) => (i ? ctx.lineTo(x, y) : ctx.moveTo(x, y)));
+  if (points.length === 1) ctx.lineTo(points[0][0] + 0.01, points[0][1]);
+  ctx.stroke();
+  return ctx.getImageData(0, 0, width, height).data;
 }
 
 /** A transparent canvas with its 2D context made (convertToBlob refuses a context-less one). */
@@ -58,6 +143,9 @@ export class MaskEditor {
     this.tool = 'none';
     this.brush = 10;
     this.show = true;
+    // Window labels are drawn while the generator is a building, tree labels for a tree.
+    this.showWindows = false;
+    this.showTree = false;
     this.drag = null;
     this.busy = false;
     overlay.dataset.tool = 'none';
@@ -73,6 +161,11 @@ export class MaskEditor {
   setTool(tool) {
     this.tool = tool;
     this.overlay.dataset.tool = tool;
+  }
+
+  /** Whether `tool` paints window labels rather than the mask. */
+  static isWindowTool(tool) {
+    return tool === 'window' || tool === 'wall';
   }
 
   setPhoto(photo) {
@@ -128,7 +221,29 @@ export class MaskEditor {
         return;
       }
       this.busy = true;
+      if (MaskEditor.isWindowTool(this.tool)) {
+        const stroke = { window: this.tool === 'window', points: drag.points.flat(), radius: this.radius() };
+        const strokes = [...(photo.windows?.strokes ?? []), stroke];
+        if (!strokes.some((s) => s.window)) {
+          if (!photo.windows?.codes) {
+            this.onError('Paint over a window first (windows brush), or find windows automatically.');
+            return;
+          }
+          // Windows found automatically: the wall brush erases them where it paints.
+          const codes = photo.windows.codes.slice();
+          const paint = strokePixels(photo.mask.width, photo.mask.height, drag.points, this.radius());
+          for (let i = 0; i < codes.length; i += 1) if (paint[4 * i + 3] > 0 && codes[i] === WINDOW) codes[i] = 1;
+          photo.windows = { codes, strokes: [] };
+          this.onChange(photo);
+          return;
+        }
+        const w = await this.client.call(REQUESTS.MASK_WINDOWS_STROKES, { key: String(photo.id), strokes });
+        photo.windows = { codes: new Uint8Array(w.codes), strokes };
+        this.onChange(photo);
+        return;
+      }
       let m;
+      let edit;
       if (this.tool === 'rect') {
         const [[x0, y0], [x1, y1]] = [drag.start, drag.points.at(-1)];
         const rect = [Math.min(x0, x1), Math.min(y0, y1), Math.max(x0, x1), Math.max(y0, y1)];
@@ -138,16 +253,15 @@ export class MaskEditor {
           this.onError('Drag a box around the whole object.');
           return;
         }
+        edit = { rect: clamped };
         m = await this.client.call(REQUESTS.MASK_RECT, { key: String(photo.id), rect: clamped });
       } else {
-        m = await this.client.call(REQUESTS.MASK_STROKE, {
-          key: String(photo.id),
-          object: this.tool === 'object',
-          points: drag.points.flat(),
-          radius: this.radius(),
-        });
+        edit = { object: this.tool === 'object', points: drag.points.flat(), radius: this.radius() };
+        m = await this.client.call(REQUESTS.MASK_STROKE, { key: String(photo.id), ...edit });
       }
       setMask(photo, m);
+      // A box starts the worker's session over; a stroke adds to it.
+      photo.edits = edit.rect ? [edit] : [...(photo.edits ?? []), edit];
       this.onChange(photo);
     } catch (err) {
       this.onError(`The correction did not work: ${err.message}`);
@@ -176,8 +290,14 @@ export class MaskEditor {
     if (this.show) {
       const img = ctx.createImageData(width, height);
       const d = img.data;
+      const win = this.showWindows && photo.windows?.codes?.length === codes.length ? photo.windows.codes : null;
+      // For trees, what the fit will see: branches brown, leaves green (tree::labels).
+      const tree = this.showTree && photo.treeLabels?.length === codes.length ? photo.treeLabels : null;
       for (let i = 0; i < codes.length; i += 1) {
-        const t = codes[i] === 128 ? TINT.unsure : codes[i] > 128 ? TINT.obj : TINT.bg;
+        let t = codes[i] === 128 ? TINT.unsure : codes[i] > 128 ? TINT.obj : TINT.bg;
+        if (win && win[i] === WINDOW) t = TINT.window;
+        else if (tree && tree[i] === 1) t = TINT.branch;
+        else if (tree && tree[i] === 2) t = TINT.leaf;
         d.set(t, 4 * i);
       }
       ctx.putImageData(img, 0, 0);
@@ -203,7 +323,7 @@ export class MaskEditor {
         ctx.strokeRect(Math.min(x0, x1), Math.min(y0, y1), Math.abs(x1 - x0), Math.abs(y1 - y0));
         ctx.setLineDash([]);
       } else {
-        ctx.strokeStyle = { object: 'rgba(40,110,255,0.9)', background: 'rgba(20,20,30,0.8)', dontcare: 'rgba(255,190,0,0.9)' }[this.tool];
+        ctx.strokeStyle = { object: 'rgba(40,110,255,0.9)', background: 'rgba(20,20,30,0.8)', dontcare: 'rgba(255,190,0,0.9)', window: 'rgba(0,215,190,0.9)', wall: 'rgba(230,220,200,0.9)' }[this.tool];
         ctx.lineWidth = 2 * this.radius();
         ctx.lineCap = ctx.lineJoin = 'round';
         ctx.beginPath();

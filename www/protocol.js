@@ -34,19 +34,37 @@ export const REQUESTS = Object.freeze({
   MASK_RECT: 'mask/rect', //   { key, rect: [x0, y0, x1, y1] } → mask (start over from a box)
   MASK_STROKE: 'mask/stroke', // { key, object: bool, points: [x, y, …], radius } → mask
   MASK_DROP: 'mask/drop', //   { key } → {} (the photo was removed)
+  // Window labels for buildings, inside the photo's current mask: { width, height, codes:
+  // ArrayBuffer } with 0 background, 1 façade, 2 window, 255 don't care (working pixels).
+  MASK_WINDOWS_AUTO: 'mask/windowsAuto', // { key } → labels (darker rectangles, automatic)
+  // { key, strokes: [{ window: bool, points: [x, y, …], radius }] } → labels (from the user's
+  // window and wall strokes; at least one window stroke).
+  MASK_WINDOWS_STROKES: 'mask/windowsStrokes',
   // { bytes: ArrayBuffer } (the original photo file) → { focal_35mm: number | null }: the
   // EXIF 35 mm-equivalent focal length, read before the page's downscaling drops the EXIF.
   PHOTO_FOCAL: 'photo/focal',
   // { fitId, generator ('auto' or a name), seed, quality, start?: number[],
-  //   masks: [{ width, height, codes, focal_35mm?: number | null }] }
+  //   masks: [{ width, height, codes, windows?: ArrayBuffer | null, focal_35mm?: number | null }] }
   // → { cancelled, result: { generator, params, lod, seed, loss, evaluations, cameras } }
   // `start`: the named generator's parameters to start from ("Refit from here"); a mask's
-  // `focal_35mm` (from PHOTO_FOCAL) sets that view's field of view, else the default is used.
+  // `focal_35mm` (from PHOTO_FOCAL) sets that view's field of view, else the default is used;
+  // a mask's `windows` (labels as MASK_WINDOWS_* give them) adds the window term of a building.
   // (`cameras` as GENERATE_GLB takes them). On the way:
   // event 'progress' { stage, generator, iteration, evaluations, work_done, work_total,
   // best_loss, params, done, preview: { width, height, coverage: ArrayBuffer } | null }.
   FIT_RUN: 'fit/run',
-  FIT_CANCEL: 'fit/cancel', // { fitId } → { found }: the running fit stops after its slice
+  FIT_CANCEL: 'fit/cancel', // { fitId } → { found }: the running fit (or tree fit) stops after its slice
+  // Trees (paper §3.5), from one photo's colours inside its mask. `rgba`: the photo at the mask's
+  // size (width × height × 4 bytes); `codes`: its mask codes (or empty: the whole photo).
+  // { width, height, rgba, codes } → { width, height, labels: ArrayBuffer } (0 background,
+  // 1 branch, 2 leaf, 255 don't care), for the preview over the photo.
+  TREE_LABELS: 'tree/labels',
+  // { fitId, seed, quality, width, height, rgba, codes } → { cancelled, result: { generator:
+  // 'tree', params, lod, seed, similarity, evaluations, cameras } }. On the way: event 'progress'
+  // { stage (1 GA, 2 seed trials, 3 local search), generation, evaluations, total_evaluations,
+  // best_similarity, params, done, preview: { width, height, labels: ArrayBuffer } | null } (the
+  // best tree's labels in the fit's square frame). Cancelled by FIT_CANCEL.
+  TREE_RUN: 'tree/run',
 });
 
-export const PROTOCOL_VERSION = 4;
+export const PROTOCOL_VERSION = 6;

@@ -1,5 +1,5 @@
-// Work is not lost: the session (downscaled photos with their EXIF focal lengths, their masks
-// and don't-care strokes, the model's generator, parameters, level of detail and starting
+// Work is not lost: the session (downscaled photos with their EXIF focal lengths, their masks,
+// the box and strokes that corrected them, don't-care strokes and window labels, the model's generator, parameters, level of detail and starting
 // point) is kept in IndexedDB on this device and restored when the page is opened again.
 // Nothing here leaves the device.
 
@@ -54,7 +54,19 @@ export function clear() {
 
 /** Serialises a photo for storage: the downscaled JPEG and its mask with don't-care strokes. */
 export async function photoRecord(p) {
-  const rec = { id: p.id, name: p.name, width: p.width, height: p.height, blob: p.blob, focal35mm: p.focal35mm ?? null, mask: null };
+  const rec = {
+    id: p.id,
+    name: p.name,
+    width: p.width,
+    height: p.height,
+    blob: p.blob,
+    focal35mm: p.focal35mm ?? null,
+    mask: null,
+    // Corrections since the automatic mask, replayed into the worker's session on restore.
+    edits: p.edits ?? [],
+    // Window labels (buildings) and the strokes they came from.
+    windows: p.windows ? { codes: p.windows.codes, strokes: p.windows.strokes ?? [] } : null,
+  };
   if (p.mask) {
     const { codes, dontCare, ...info } = p.mask;
     rec.mask = { ...info, codes, dontCare: await dontCare.convertToBlob({ type: 'image/png' }) };
@@ -65,7 +77,17 @@ export async function photoRecord(p) {
 /** Rebuilds a photo from its record (the inverse of photoRecord). */
 export async function photoFromRecord(rec) {
   const bitmap = await createImageBitmap(rec.blob);
-  const photo = { id: rec.id, name: rec.name, width: rec.width, height: rec.height, bitmap, blob: rec.blob, focal35mm: rec.focal35mm ?? null };
+  const photo = {
+    id: rec.id,
+    name: rec.name,
+    width: rec.width,
+    height: rec.height,
+    bitmap,
+    blob: rec.blob,
+    focal35mm: rec.focal35mm ?? null,
+    edits: Array.isArray(rec.edits) ? rec.edits : [],
+    windows: rec.windows?.codes ? { codes: new Uint8Array(rec.windows.codes), strokes: rec.windows.strokes ?? [] } : null,
+  };
   if (rec.mask) {
     const { dontCare, ...mask } = rec.mask;
     const canvas = new OffscreenCanvas(mask.width, mask.height);

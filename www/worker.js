@@ -54,11 +54,27 @@ const handlers = {
     masks.delete(key);
     return {};
   },
+  [REQUESTS.MASK_WINDOWS_AUTO]: ({ key }) => windowsOut(maskSession(key), maskSession(key).detectWindows()),
+  [REQUESTS.MASK_WINDOWS_STROKES]: ({ key, strokes = [] }) => {
+    const session = maskSession(key);
+    const labels = session.windowsFromStrokes(
+      Uint8Array.from(strokes.map((s) => (s.window ? 1 : 0))),
+      Uint32Array.from(strokes.map((s) => s.points.length / 2)),
+      Float32Array.from(strokes.flatMap((s) => s.points)),
+      Float32Array.from(strokes.map((s) => s.radius)),
+    );
+    return windowsOut(session, labels);
+  },
   [REQUESTS.PHOTO_FOCAL]: ({ bytes }) => {
     const f = wasm.focal35mmFromFile(new Uint8Array(bytes));
     return { focal_35mm: f > 0 ? f : null };
   },
   [REQUESTS.FIT_RUN]: (payload, emit) => runFit(payload, emit),
+  [REQUESTS.TREE_LABELS]: ({ width, height, rgba, codes }) => {
+    const labels = wasm.treeLabels(width, height, new Uint8Array(rgba), new Uint8Array(codes ?? 0));
+    return new Transfer({ width, height, labels: labels.buffer }, [labels.buffer]);
+  },
+  [REQUESTS.TREE_RUN]: (payload, emit) => runTreeFit(payload, emit),
   [REQUESTS.FIT_CANCEL]: ({ fitId }) => {
     const found = fits.has(fitId);
     if (found) fits.get(fitId).cancelled = true;
@@ -79,6 +95,11 @@ function maskSession(key) {
 function maskOut(session) {
   const codes = session.codes();
   return new Transfer({ ...session.info(), codes: codes.buffer }, [codes.buffer]);
+}
+
+function windowsOut(session, labels) {
+  const { width, height } = session.info();
+  return new Transfer({ width, height, codes: labels.buffer }, [labels.buffer]);
 }
 
 /** Yields to the worker's message loop (a cancel or a slider's request gets in), unclamped. */
@@ -104,6 +125,15 @@ async function runFit({ fitId, generator, seed = 1, quality = 1, start = [], mas
     codes.set(new Uint8Array(m.codes), at);
     at += m.width * m.height;
   }
+  // Window labels of the views that have them, concatenated (see FitSession::new).
+  const withWindows = views.filter((m) => m.windows);
+  const windowCodes = new Uint8Array(withWindows.reduce((n, m) => n + m.width * m.height, 0));
+  at = 0;
+  for (const m of withWindows) {
+    windowCodes.set(new Uint8Array(m.windows), at);
+    at += m.width * m.height;
+  }
+  const windowFlags = withWindows.length ? Uint8Array.from(views.map((m) => (m.windows ? 1 : 0))) : new Uint8Array(0);
   const session = new wasm.FitSession(
     generator,
     seed,
@@ -114,6 +144,8 @@ async function runFit({ fitId, generator, seed = 1, quality = 1, start = [], mas
     // 0: no focal length known for that view (the core's default field of view).
     Float64Array.from(views.map((m) => (m.focal_35mm > 0 ? wasm.fovFromFocal35mm(m.focal_35mm, m.width, m.height) : 0))),
     Float64Array.from(start),
+    windowFlags,
+    windowCodes,
   );
   const job = { cancelled: false };
   fits.set(fitId, job);
@@ -133,6 +165,46 @@ async function runFit({ fitId, generator, seed = 1, quality = 1, start = [], mas
           const coverage = session.previewCoverage();
           preview = { width: w, height: session.previewHeight(), coverage: coverage.buffer };
           transfer.push(coverage.buffer);
+        }
+        emit('progress', { ...p, preview }, transfer);
+      }
+      if (p.done || job.cancelled) break;
+      await tick();
+      if (job.cancelled) break;
+    }
+    return { cancelled: job.cancelled, result: session.result() };
+  } finally {
+    fits.delete(fitId);
+    session.free();
+  }
+}
+
+/** The tree GA's evaluations at quality 1 (TreeFitSession's default budget). */
+const TREE_EVALUATIONS = 4700;
+
+/** A tree fit, stepped in slices like runFit. */
+async function runTreeFit({ fitId, seed = 1, quality = 1, width, height, rgba, codes }, emit) {
+  const budget = quality === 1 ? 0 : Math.max(200, Math.round(TREE_EVALUATIONS * quality));
+  const session = new wasm.TreeFitSession(width, height, new Uint8Array(rgba), new Uint8Array(codes ?? 0), seed, budget);
+  const job = { cancelled: false };
+  fits.set(fitId, job);
+  try {
+    let last = 0;
+    let stage = 0;
+    for (;;) {
+      const p = session.step();
+      const now = performance.now();
+      // A preview comes only with the step that changed the best tree: always pass it on.
+      const w = session.previewWidth();
+      if (w || p.done || p.stage !== stage || now - last >= PROGRESS_MS) {
+        last = now;
+        stage = p.stage;
+        let preview = null;
+        const transfer = [];
+        if (w) {
+          const labels = session.previewLabels();
+          preview = { width: w, height: session.previewHeight(), labels: labels.buffer };
+          transfer.push(labels.buffer);
         }
         emit('progress', { ...p, preview }, transfer);
       }

@@ -7,17 +7,20 @@
 //!   [`Objective`](crate::optim::Objective) for the optimisers.
 //! - [`session`]: the coarse-to-fine schedule (memetic at 128², Adam at 256² and 512²) as a
 //!   resumable [`Session`] for the page and the CLI.
+//! - [`windows`]: the window term of a building fit (window labels per view).
 //! - [`eval`]: the paper's IoU over 64 turntable views.
 
 pub mod eval;
 pub mod objective;
 pub mod session;
 pub mod views;
+pub mod windows;
 
 pub use eval::{align_to_reference, iou64, normalized};
 pub use objective::{FitObjective, Layout, render_coverage, resample_mask};
 pub use session::{FitConfig, FitResult, Progress, Session};
 pub use views::{CAMERA_DISTANCE, DEFAULT_FOV_Y, ViewVars, fov_from_focal_35mm};
+pub use windows::{DEFAULT_WINDOW_WEIGHT, WindowTerm};
 
 use crate::glb::ExportCamera;
 use std::fmt;

@@ -14,6 +14,7 @@
 //! and the level of detail, so they are cached per combination, shared between threads.
 
 use super::views::ViewVars;
+use super::windows::WindowTerm;
 use crate::camera::{N_VIEW_PARAMS, View};
 use crate::generators::{Generator, Lod, Mesh};
 use crate::loss;
@@ -157,6 +158,7 @@ pub struct FitObjective {
     reg_weight: f64,
     parallel_render: bool,
     topologies: TopologyCache,
+    windows: Option<Arc<WindowTerm>>,
 }
 
 impl FitObjective {
@@ -179,7 +181,19 @@ impl FitObjective {
             reg_weight,
             parallel_render,
             topologies: TopologyCache::default(),
+            windows: None,
         }
+    }
+
+    /// Adds the window term ([`super::windows`]): its value counts, its gradient is zero.
+    pub fn with_windows(mut self, windows: Option<Arc<WindowTerm>>) -> FitObjective {
+        self.windows = windows;
+        self
+    }
+
+    /// Whether the window term is part of this objective.
+    pub fn has_windows(&self) -> bool {
+        self.windows.is_some()
     }
 
     /// The layout of the optimisation vector.
@@ -306,6 +320,12 @@ impl FitObjective {
             }
             Ok(())
         })?;
+        if let Some(term) = &self.windows {
+            // Value only (see the windows module): the views at the term's size.
+            loss += term.value(self.generator, gen_x, |v, w, h| {
+                layout.view_vars(x, v).view(w, h)
+            })?;
+        }
         if self.reg_weight > 0.0 {
             let (r, rg) = self.generator.regularizer(gen_x);
             loss += self.reg_weight * r;

@@ -66,6 +66,11 @@ impl LabelRenderer {
         })
     }
 
+    /// Width and height of the images this renderer makes.
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
     /// Renders `triangles` of `positions` seen through `view`, triangle `t` carrying label
     /// `tri_labels[t] < n_labels`. Returns the coverage planes: `n_labels` row-major images,
     /// plane `l` at `[l·W·H .. (l+1)·W·H]`. Errors on mismatched lengths, bad indices or

@@ -3,7 +3,7 @@
 //! message loop between them, so the page stays responsive and a cancel arrives promptly;
 //! cancelling is simply not stepping any more.
 
-use crate::mask::Mask;
+use crate::mask::{LabelImage, Mask};
 use crate::reconstruct::{FitConfig, Session, export_camera};
 use wasm_bindgen::prelude::*;
 
@@ -81,13 +81,63 @@ fn masks_of(widths: &[u32], heights: &[u32], codes: &[u8]) -> Result<Vec<Mask>, 
     Ok(masks)
 }
 
+/// Window labels per view: `flags[i]` is 1 when view `i` has labels, and `codes` holds the
+/// labels of the flagged views only (0 background, 1 façade, 2 window, 255 don't care),
+/// `widths[i] × heights[i]` each, concatenated. Empty `flags`: no view has labels.
+fn windows_of(
+    widths: &[u32],
+    heights: &[u32],
+    flags: &[u8],
+    codes: &[u8],
+) -> Result<Vec<Option<LabelImage>>, JsError> {
+    if flags.is_empty() {
+        return if codes.is_empty() {
+            Ok(Vec::new())
+        } else {
+            Err(JsError::new(
+                "window labels without the views they belong to",
+            ))
+        };
+    }
+    if flags.len() != widths.len() {
+        return Err(JsError::new(&format!(
+            "{} window flags for {} masks",
+            flags.len(),
+            widths.len()
+        )));
+    }
+    let mut out = Vec::with_capacity(flags.len());
+    let mut at = 0usize;
+    for ((&w, &h), &f) in widths.iter().zip(heights).zip(flags) {
+        if f == 0 {
+            out.push(None);
+            continue;
+        }
+        let n = w as usize * h as usize;
+        let Some(slice) = codes.get(at..at + n) else {
+            return Err(JsError::new(
+                "the window label bytes are shorter than the sizes say",
+            ));
+        };
+        out.push(Some(LabelImage::new(w, h, slice.to_vec()).map_err(js)?));
+        at += n;
+    }
+    if at != codes.len() {
+        return Err(JsError::new(
+            "the window label bytes are longer than the sizes say",
+        ));
+    }
+    Ok(out)
+}
+
 #[wasm_bindgen]
 impl FitSession {
     /// Starts a fit of `generator` (or `auto`) to the masks (see `masks_of`); nothing is
     /// evaluated yet. `quality` scales every stage's budget (1 = default). `fov_y`: one
     /// vertical field of view (radians) per mask, 0 where unknown (the default is used), or
     /// empty. `start`: the generator's parameters to start from ("refit from here"; a named
-    /// generator only), or empty.
+    /// generator only), or empty. `window_flags`/`window_codes`: window labels for the views
+    /// that have them (buildings; see `windows_of`), or both empty.
     #[wasm_bindgen(constructor)]
     #[allow(
         clippy::too_many_arguments,
@@ -102,6 +152,8 @@ impl FitSession {
         codes: &[u8],
         fov_y: &[f64],
         start: &[f64],
+        window_flags: &[u8],
+        window_codes: &[u8],
     ) -> Result<FitSession, JsError> {
         if !(quality.is_finite() && quality > 0.0 && quality <= 16.0) {
             return Err(JsError::new("quality must be in (0, 16]"));
@@ -120,6 +172,7 @@ impl FitSession {
             // 0 stands for "unknown"; anything else is checked by the session.
             fov_y: fov_y.iter().map(|&f| (f != 0.0).then_some(f)).collect(),
             start: (!start.is_empty()).then(|| start.to_vec()),
+            windows: windows_of(widths, heights, window_flags, window_codes)?,
             ..FitConfig::default()
         };
         let masks = masks_of(widths, heights, codes)?;

@@ -3,6 +3,7 @@
 //! canvas; masks go out as 8-bit codes (object 255, background 0, don't care 128 — the same
 //! as [`Mask::to_luma8`](crate::mask::Mask::to_luma8)), in working-image pixels.
 
+use crate::segment::windows::{detect_windows, windows_from_strokes};
 use crate::segment::{BBox, Label, Options, Photo, Session, Stroke, WORKING_SIDE};
 use wasm_bindgen::prelude::*;
 
@@ -74,6 +75,71 @@ impl MaskSession {
         self.session.add_stroke(&stroke).map_err(js)?;
         self.session.recut().map_err(js)?;
         Ok(())
+    }
+
+    /// Window labels found automatically inside the current mask (darker rectangles; see
+    /// `segment::windows`): 0 background, 1 façade, 2 window, 255 don't care, row-major in
+    /// working pixels.
+    #[wasm_bindgen(js_name = detectWindows)]
+    pub fn detect_windows(&self) -> Result<Vec<u8>, JsError> {
+        let labels = detect_windows(&self.photo, self.session.segmentation()).map_err(js)?;
+        Ok(labels.labels().to_vec())
+    }
+
+    /// Window labels from the user's strokes inside the current mask, labelled like
+    /// [`MaskSession::detect_windows`]. Stroke `i` paints windows when `window[i]` is 1 and
+    /// wall when 0, has `counts[i]` points (`x, y` pairs in `points`, in order) and radius
+    /// `radii[i]`, all in working pixels. At least one window stroke is needed.
+    #[wasm_bindgen(js_name = windowsFromStrokes)]
+    pub fn windows_from_strokes(
+        &self,
+        window: &[u8],
+        counts: &[u32],
+        points: &[f32],
+        radii: &[f32],
+    ) -> Result<Vec<u8>, JsError> {
+        if window.len() != counts.len() || window.len() != radii.len() {
+            return Err(JsError::new(
+                "one kind, point count and radius per window stroke",
+            ));
+        }
+        if !points.iter().all(|v| v.is_finite()) || !radii.iter().all(|r| r.is_finite() && *r > 0.0)
+        {
+            return Err(JsError::new(
+                "window strokes need finite points and positive radii",
+            ));
+        }
+        let mut strokes = Vec::with_capacity(window.len());
+        let mut at = 0usize;
+        for ((&kind, &n), &radius) in window.iter().zip(counts).zip(radii) {
+            let n = n as usize;
+            let Some(p) = points.get(2 * at..2 * (at + n)) else {
+                return Err(JsError::new(
+                    "the window stroke points are fewer than the counts say",
+                ));
+            };
+            if n == 0 {
+                return Err(JsError::new("a window stroke needs at least one point"));
+            }
+            strokes.push(Stroke {
+                label: if kind == 1 {
+                    Label::Object
+                } else {
+                    Label::Background
+                },
+                points: p.chunks_exact(2).map(|q| [q[0], q[1]]).collect(),
+                radius,
+            });
+            at += n;
+        }
+        if 2 * at != points.len() {
+            return Err(JsError::new(
+                "the window stroke points are more than the counts say",
+            ));
+        }
+        let labels =
+            windows_from_strokes(&self.photo, self.session.segmentation(), &strokes).map_err(js)?;
+        Ok(labels.labels().to_vec())
     }
 
     /// The mask for the fit: object 255, background 0, don't care 128 (a band along the

@@ -14,7 +14,7 @@ mod tree;
 
 pub use fit::FitSession;
 pub use mask::MaskSession;
-pub use tree::TreeFitSession;
+pub use tree::{TreeFitSession, tree_labels};
 
 #[cfg(feature = "threads")]
 pub use wasm_bindgen_rayon::init_thread_pool;

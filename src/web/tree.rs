@@ -19,6 +19,7 @@
 //! if (fit.previewWidth() > 0) {            // the best tree's labels changed in this step
 //!   const labels = fit.previewLabels();    // Uint8Array, previewWidth × previewHeight (128²)
 //! }
+//! const labels = treeLabels(width, height, rgba, codes); // the same labels, for a preview
 //! const r = fit.result(); // { generator: "tree", params, lod, seed, similarity, evaluations,
 //! //                          cameras: Float32Array-able number[18] (yfov, aspect, 16 floats
 //! //                          camera-to-world, column-major): the photo's camera for generateGlb }
@@ -86,6 +87,20 @@ impl TreeFitSession {
             preview: None,
         })
     }
+}
+
+/// The labels a tree fit of this photo would use (see [`TreeFitSession::new`]): 0 background,
+/// 1 branch, 2 leaf, 255 don't care, row-major; for the page's preview over the photo.
+#[wasm_bindgen(js_name = treeLabels)]
+pub fn tree_labels(width: u32, height: u32, rgba: &[u8], codes: &[u8]) -> Result<Vec<u8>, JsError> {
+    let labels =
+        labels_from_rgb(width, height, rgba, 4, &ColorThresholds::default()).map_err(js)?;
+    let labels = if codes.is_empty() {
+        labels
+    } else {
+        apply_mask_codes(&labels, codes).map_err(js)?
+    };
+    Ok(labels.labels().to_vec())
 }
 
 #[wasm_bindgen]

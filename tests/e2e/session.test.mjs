@@ -1,6 +1,7 @@
-// Work is not lost: a reload restores the photos, masks and model from IndexedDB; "Start over"
-// clears them; a worker that dies mid-session is replaced and the session goes on (the model is
-// shown again, mask corrections still work).
+// Work is not lost: a reload restores the photos, masks and model from IndexedDB; corrections
+// made before a reload still count for the next one; "Start over" clears them; a worker that dies
+// mid-session is replaced and the session goes on (the model is shown again, mask corrections
+// still work).
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { startServer, launchBrowser, openPage, screenshot } from './harness.mjs';
@@ -71,6 +72,59 @@ test('a reload restores photos, masks, the model and its starting point', async 
   assert.ok(Math.abs(top) < 5, `the model step is ${top}px from the top of the window`);
   assert.match(await page.textContent('#restored-text'), /Restored your last session \(1 photo\)/);
   await screenshot(page, '09-restored');
+});
+
+/** Drags the current brush along `points` (fractions of the mask overlay), waits for the new mask. */
+async function brush(tool, points) {
+  await page.check(`input[name="tool"][value="${tool}"]`);
+  await page.evaluate(() => {
+    const r = document.getElementById('mask-canvas').getBoundingClientRect();
+    window.scrollBy(0, r.top + r.height / 2 - window.innerHeight / 2);
+  });
+  const box = await page.locator('#mask-canvas').boundingBox();
+  const at = ([fx, fy]) => [box.x + fx * box.width, box.y + fy * box.height];
+  // A handle, so the wait compares with the very array (a serialised copy never equals it).
+  const before = await page.evaluateHandle(() => window.procfit.state.photos[0].mask.codes);
+  await page.mouse.move(...at(points[0]));
+  await page.mouse.down();
+  for (const p of points.slice(1)) await page.mouse.move(...at(p), { steps: 3 });
+  await page.mouse.up();
+  await page.waitForFunction((b) => window.procfit.state.photos[0].mask.codes !== b, before, { timeout: 30000 });
+  await page.check('input[name="tool"][value="none"]');
+}
+
+/** The mask code at (fx, fy), fractions of the photo. */
+const codeAt = ([fx, fy]) =>
+  page.evaluate(([fx, fy]) => {
+    const m = window.procfit.state.photos[0].mask;
+    return m.codes[Math.floor(fy * m.height) * m.width + Math.floor(fx * m.width)];
+  }, [fx, fy]);
+
+test('a correction made before a reload still counts after it', async () => {
+  // The first correction: a background stroke across the left part of the bowl.
+  const [x0, y0, x1, y1] = await page.evaluate(() => {
+    const m = window.procfit.state.photos[0].mask;
+    const [a, b, c, d] = m.bbox;
+    return [a / m.width, b / m.height, c / m.width, d / m.height];
+  });
+  const y = (y0 + y1) / 2;
+  const cut = [x0 + 0.2 * (x1 - x0), y];
+  assert.equal(await codeAt(cut), 255, 'the bowl should start as object there');
+  await brush('background', [[x0 + 0.12 * (x1 - x0), y], [x0 + 0.28 * (x1 - x0), y]]);
+  assert.equal(await codeAt(cut), 0, 'the background stroke did not cut the bowl');
+  const changedAt = await page.evaluate(() => Date.now());
+  await page.waitForFunction((t) => Number(document.body.dataset.saved || 0) > t, changedAt, { timeout: 20000 });
+  assert.equal(await page.evaluate(() => window.procfit.state.photos[0].edits.length), 1);
+  await page.reload();
+  await ready();
+  assert.equal(await codeAt(cut), 0, 'the stored mask lost the correction');
+  // A second correction, far from the first (the top-right corner, background already): the
+  // worker re-cuts with both strokes, so the cut stays (before the replay, the worker's session
+  // was the automatic one and the bowl came back whole).
+  await brush('background', [[0.96, 0.04], [0.9, 0.04]]);
+  assert.equal(await codeAt(cut), 0, 'the correction made before the reload was dropped');
+  assert.equal(await page.evaluate(() => window.procfit.state.photos[0].edits.length), 2);
+  await screenshot(page, '09b-corrections-after-reload');
 });
 
 test('the worker dies mid-session: it is replaced and the session goes on', async () => {

@@ -1,0 +1,121 @@
+// Trees in the page: on the bundled tree sample (an oak rendered by procfit itself, bark brown
+// and leaf green; see scripts/make-samples.mjs), the mask step shows what the tree fit sees
+// (branches brown, leaves green), the tree fit runs with progress and can be cancelled, and its
+// tree lands in the viewer with its sliders and downloads as a valid GLB.
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { readFileSync } from 'node:fs';
+import { join } from 'node:path';
+import validator from 'gltf-validator';
+import { startServer, launchBrowser, openPage, screenshot, ARTIFACTS } from './harness.mjs';
+
+let server;
+let browser;
+let page;
+let log;
+
+const settled = () => page.evaluate(() => window.procfit.editor.settled());
+const messageOf = (id) => page.evaluate((id) => {
+  const m = document.getElementById(id);
+  return m.hidden ? '' : m.textContent;
+}, id);
+
+before(async () => {
+  server = await startServer();
+  browser = await launchBrowser();
+  ({ page, log } = await openPage(browser.context, server.url));
+  await page.waitForSelector('body[data-ready="true"]', { timeout: 90000 });
+});
+
+after(async () => {
+  await browser?.close();
+  server?.stop();
+});
+
+test('the tree sample shows its branch and leaf labels over the photo', async () => {
+  await page.click('button[data-sample="oak"]');
+  await page.waitForFunction(() => /Object found|check the mask/.test(document.getElementById('mask-state').textContent), null, { timeout: 60000 });
+  assert.equal(await page.isChecked('#gen-tree'), true);
+  assert.equal(await page.isDisabled('#gen-tree'), false);
+  await page.waitForFunction(() => /What the tree fit sees/.test(document.getElementById('tree-state').textContent), null, { timeout: 30000 });
+  const text = await page.textContent('#tree-state');
+  const [, branch, leaf] = text.match(/branches in brown \((\d+) %\), leaves in green \((\d+) %\)/).map(Number);
+  assert.ok(leaf >= 30 && branch >= 1, `branch ${branch} %, leaf ${leaf} %`);
+  // The overlay shows them: green and brown pixels.
+  const tints = await page.evaluate(() => {
+    const c = document.getElementById('mask-canvas');
+    const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+    let green = 0;
+    let brown = 0;
+    for (let i = 0; i < d.length; i += 4) {
+      // The overlay's leaf and branch tints (masking.js), read back with rounding.
+      if (Math.abs(d[i] - 40) < 6 && Math.abs(d[i + 1] - 200) < 6 && Math.abs(d[i + 2] - 60) < 6) green += 1;
+      if (Math.abs(d[i] - 150) < 6 && Math.abs(d[i + 1] - 90) < 6 && Math.abs(d[i + 2] - 40) < 6) brown += 1;
+    }
+    return { green, brown };
+  });
+  await page.locator('#photo-view').screenshot({ path: join(ARTIFACTS, '11-tree-labels-photo.png') });
+  await screenshot(page, '11-tree-labels');
+  assert.ok(tints.green > 1000 && tints.brown > 20, JSON.stringify(tints));
+  // Not a building: no windows tools.
+  assert.equal(await page.isHidden('#window-tools'), true);
+});
+
+test('the tree fit runs with progress and puts its tree in the viewer', async () => {
+  const stages = [];
+  await page.exposeFunction('recordTreeStage', (s) => stages.push(s));
+  await page.evaluate(() => window.procfit.fitter.addEventListener('progress', (e) => window.recordTreeStage(e.detail.stage)));
+  await page.selectOption('#fit-quality', '0.25');
+  const before = await page.evaluate(() => window.procfit.editor.params.slice());
+  const t0 = Date.now();
+  await page.click('#fit-start');
+  await page.waitForFunction(() => document.body.dataset.fitted, null, { timeout: 600000 });
+  const seconds = (Date.now() - t0) / 1000;
+  assert.equal(await page.evaluate(() => document.body.dataset.fitted), 'done', await messageOf('fit-message'));
+  assert.match(await messageOf('fit-message'), /Fitted in/);
+  assert.ok(stages.includes(1), `stages seen: ${[...new Set(stages)]}`);
+  assert.match(await page.textContent('#fit-preview-caption'), /Best tree so far/);
+  await settled();
+  const after = await page.evaluate(() => ({ generator: window.procfit.editor.spec.name, params: window.procfit.editor.params.slice() }));
+  assert.equal(after.generator, 'tree');
+  assert.notDeepEqual(after.params, before, 'the editor did not receive the fitted tree');
+  assert.equal(await page.inputValue('#preset'), 'fitted');
+  assert.ok((await page.locator('#sliders input').count()) > 5, 'the tree has no sliders');
+  console.log(`# tree sample fit (quick): ${seconds.toFixed(1)} s; stages ${[...new Set(stages)].join(', ')}`);
+  await screenshot(page, '11b-tree-fitted');
+  await page.locator('#fit-progress').screenshot({ path: join(ARTIFACTS, '11b-tree-fit-progress.png') });
+  await page.locator('#viewer').screenshot({ path: join(ARTIFACTS, '11b-tree-fitted-view.png') });
+});
+
+test('the fitted tree downloads as a valid GLB with the photo camera', async () => {
+  const [dl] = await Promise.all([page.waitForEvent('download'), page.click('#download-glb')]);
+  const bytes = readFileSync(await dl.path());
+  assert.match(dl.suggestedFilename(), /^tree-/);
+  const gltf = JSON.parse(bytes.subarray(20, 20 + bytes.readUInt32LE(12)).toString('utf8'));
+  assert.equal(gltf.cameras?.length, 1, 'the fitted tree has no camera for the photo');
+  const report = await validator.validateBytes(new Uint8Array(bytes), {
+    uri: 'tree.glb',
+    externalResourceFunction: (uri) => Promise.reject(new Error(`external resource ${uri}`)),
+  });
+  assert.equal(report.issues.numErrors, 0, JSON.stringify(report.issues.messages.slice(0, 5)));
+});
+
+test('a tree fit can be cancelled and keeps the best tree so far', async () => {
+  await page.selectOption('#fit-quality', '3');
+  await page.evaluate(() => delete document.body.dataset.fitted);
+  await page.click('#fit-start');
+  await page.waitForFunction(() => document.getElementById('fit-bar').value > 0, null, { timeout: 120000 });
+  await page.click('#fit-cancel');
+  await page.waitForFunction(() => document.body.dataset.fitted, null, { timeout: 120000 });
+  assert.equal(await page.evaluate(() => document.body.dataset.fitted), 'cancelled');
+  assert.match(await messageOf('fit-message'), /Stopped after/);
+  assert.equal(await page.evaluate(() => window.procfit.editor.spec.name), 'tree');
+  await page.selectOption('#fit-quality', '1');
+});
+
+test('no console errors, no page errors, no request outside the origin', () => {
+  assert.deepEqual(log.pageErrors, []);
+  assert.deepEqual(log.consoleErrors, []);
+  const origin = new URL(server.url).origin;
+  assert.deepEqual(log.requests.filter((u) => !u.startsWith(origin) && !u.startsWith('data:') && !u.startsWith('blob:')), []);
+});
