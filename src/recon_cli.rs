@@ -25,7 +25,7 @@ pub struct ReconstructArgs {
     /// Seed of the fit (same seed, same result).
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Stage-1 evaluations (default 5000 × quality; for a tree, the GA's, default 4720).
+    /// Stage-1 evaluations (default 5000 × quality; for a tree, the GA's, default 4608).
     #[arg(long)]
     budget: Option<usize>,
     /// Whole fits from different seeds, the lowest final loss wins (not for trees).

@@ -3,7 +3,10 @@
 //! bounding-box-normalised turntable views, [`silhouette_iou64`]); and the resumable
 //! [`TreeSession`] is deterministic however it is stepped.
 //!
-//! The recovery test runs three fits of ≈ 5 300 evaluations each (about 2 minutes on 2 cores).
+//! The recovery test runs three default fits of 4 896 evaluations each (about 2 minutes on 2
+//! cores); measured: similarity 0.721 / 0.824 / 0.725, IoU-64 0.646 / 0.636 / 0.586 (before the
+//! leaf-cluster generator and the preset-seeded, fixed-seed fit: IoU-64 ≈ 0.21). The mutation
+//! comparison runs 18 small fits (about 1.5 minutes).
 
 use procfit::generators::tree::{TreeGenerator, idx};
 use procfit::generators::{Generator, Lod};
@@ -49,14 +52,14 @@ fn default_fit_recovers_non_preset_trees() {
     let g = TreeGenerator;
     let view = tree_view(128, 128, 12.0).expect("view");
     let cfg = TreeFitConfig::default();
-    let stats = MutationStats::tree().expect("stats");
     for (name, truth) in targets() {
+        // The default fit: Gaussian mutation (see the last test).
         let fit = fit_tree(
             &reference(&truth, 128),
             TreeTraits::default(),
             view,
             &cfg,
-            Some(&stats),
+            None,
         )
         .expect("fits");
         let iou = silhouette_iou64(
@@ -123,4 +126,42 @@ fn session_is_deterministic_however_stepped() {
     let same = fit_tree(&reference, TreeTraits::default(), view, &cfg, Some(&stats)).expect("fits");
     assert_eq!(same.params, fa.params);
     assert_eq!(same.similarity, fa.similarity);
+}
+
+/// Issue 8 asks whether Algorithm 3 mutation beats plain Gaussian mutation on the real tree
+/// fit. Measured here (3 trees × 3 seeds, 5 generations ≈ 650 GA evaluations, 96², no seed
+/// trials or local search): it does not — mean best similarity Gaussian 0.620, Algorithm 3
+/// 0.583 (0.603 with 8 candidates a mutation instead of 500; 0.465 against 0.440 from all-random
+/// starts). So the fit's default is Gaussian, and this test fails if that stops being the
+/// better choice.
+#[test]
+fn gaussian_mutation_is_the_better_default_on_trees() {
+    let view = tree_view(96, 96, 12.0).expect("view");
+    let stats = MutationStats::tree().expect("stats");
+    let (mut gauss, mut quality) = (0.0, 0.0);
+    let mut runs = 0.0;
+    for (_, truth) in targets() {
+        let reference = reference(&truth, 96);
+        for seed in 1..=3 {
+            let mut cfg = TreeFitConfig::default();
+            cfg.ga.generations = 5;
+            cfg.ga.seed = seed;
+            cfg.seed_trials = 0;
+            cfg.polish = 0;
+            let fit = |m| {
+                fit_tree(&reference, TreeTraits::default(), view, &cfg, m)
+                    .expect("fits")
+                    .similarity
+            };
+            gauss += fit(None);
+            quality += fit(Some(&stats));
+            runs += 1.0;
+        }
+    }
+    let (gauss, quality) = (gauss / runs, quality / runs);
+    println!("mean best similarity: gaussian {gauss:.4}, algorithm 3 {quality:.4}");
+    assert!(
+        gauss >= quality,
+        "algorithm 3 ({quality:.4}) now beats gaussian ({gauss:.4}): make it the default"
+    );
 }

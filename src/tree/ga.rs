@@ -9,9 +9,14 @@
 //! is their one-point crossover, mutated with chance [`GaConfig::mutation_chance`] either by a
 //! plain Gaussian or by Algorithm 3 ([`super::mutation::MutationStats`]).
 //!
+//! The run is resumable ([`TreeGa`]): each [`TreeGa::step`] makes one batch of evaluations (a
+//! leaf's first population or one generation), so a fit can report progress and be cancelled
+//! between batches. Leaf GAs may be seeded with start genomes (the tree fit uses the presets)
+//! besides random ones.
+//!
 //! Determinism: all random numbers come from one seeded stream per node, drawn on the calling
 //! thread; only fitness evaluation runs in parallel (rayon, order-preserving), so a seed gives
-//! the same result on any number of threads.
+//! the same result on any number of threads and however the run is stepped.
 
 use super::TreeError;
 use super::mutation::MutationStats;
