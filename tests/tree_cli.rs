@@ -16,7 +16,8 @@ fn procfit(args: &[&str]) -> Output {
 }
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("procfit-tree-cli-{}", std::process::id()));
+    // Under target/tmp (cargo clean removes it), not the system temp dir.
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("tree-cli");
     std::fs::create_dir_all(&dir).expect("dir");
     dir.join(name)
 }

@@ -727,7 +727,10 @@ async function runFit({ generator, start = null }) {
   try {
     const out = await fitter.run({ generator, photos: state.photos.slice(), quality: Number($('fit-quality').value), start });
     const r = out.result;
-    chooseGenerator(r.generator, { params: r.params, lod: state.editor.lod, preset: 'fitted', cameras: r.cameras });
+    // A building's windows are glass from HIGH detail up (MEDIUM shows them as recessed
+    // bands), so a fitted building opens at HIGH at least: the windows the photo shows.
+    const lod = r.generator === 'building' ? Math.max(state.editor.lod, 2) : state.editor.lod;
+    chooseGenerator(r.generator, { params: r.params, lod, preset: 'fitted', cameras: r.cameras });
     say(
       fitMessage,
       out.cancelled

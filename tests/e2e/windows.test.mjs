@@ -193,6 +193,9 @@ test('the fit gets the windows and finds the floors (within one)', async () => {
     );
     return out.result.params;
   }, Number(process.env.FIT_QUALITY ?? '0.25'));
+  // The fitted building opens at HIGH detail, where its windows are glass (a part of its own).
+  assert.equal(await page.inputValue('#lod'), '2', 'a fitted building opens at HIGH detail');
+  await page.waitForFunction(() => window.procfit.viewer?.parts?.includes('window_glass'), null, { timeout: 20000 });
   await screenshot(page, '10c-building-fitted');
   await page.locator('#fit-preview').screenshot({ path: join(ARTIFACTS, '10c-building-fit-preview.png') });
   await page.locator('#viewer').screenshot({ path: join(ARTIFACTS, '10c-building-fitted-view.png') });
