@@ -28,7 +28,8 @@ pub struct ReconstructArgs {
     /// Stage-1 evaluations (default 5000 × quality; for a tree, the GA's, default 4608).
     #[arg(long)]
     budget: Option<usize>,
-    /// Whole fits from different seeds, the lowest final loss wins (not for trees).
+    /// Whole fits from different seeds, run side by side; the lowest final loss wins (not for
+    /// trees).
     #[arg(long, default_value_t = procfit::reconstruct::FitConfig::default().restarts)]
     restarts: usize,
     /// Quality/speed knob: multiplies every stage's budget.
@@ -195,9 +196,8 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
                 .collect();
             let _ = write!(
                 stderr,
-                "\r{} run {}/{} stage {}/3 [{bar}] {:>3.0}% {} evals, loss {:.5}, ETA {eta}   ",
+                "\r{} ×{} stage {}/3 [{bar}] {:>3.0}% {} evals, loss {:.5}, ETA {eta}   ",
                 p.generator,
-                p.run,
                 p.runs,
                 p.stage,
                 100.0 * frac,

@@ -127,9 +127,10 @@ export class FitRunner extends EventTarget {
     const frac = p.work_total > 0 ? Math.min(1, p.work_done / p.work_total) : 0;
     this.els.bar.value = frac;
     const names = this.tree ? TREE_STAGES : STAGES;
-    // A fit makes a few runs from different seeds and keeps the best: say which, and start
-    // each run's curves afresh (the outline shown stays the best finished run's).
-    const tries = p.runs > 1 ? ` (try ${p.run} of ${p.runs})` : '';
+    // A fit makes a few runs from different seeds side by side and keeps the best: say so.
+    // The stage and curve are the first unfinished run's; when it changes, its curves start
+    // afresh (the outline shown is the best finished run's once there is one).
+    const tries = p.runs > 1 ? ` (best of ${p.runs} fits run side by side)` : '';
     if (p.run !== undefined && p.run !== this.lastRun) {
       this.lastRun = p.run;
       this.curves = { 1: [], 2: [], 3: [] };

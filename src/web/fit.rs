@@ -31,7 +31,8 @@ struct StepOut {
     /// `null` before anything was evaluated.
     best_loss: Option<f64>,
     params: Vec<f64>,
-    /// The run (1-based) of `runs` (restarts from other seeds; the best one is the result).
+    /// The run (1-based) whose stage and loss these are, of `runs` (fits from other seeds,
+    /// stepped side by side; the best one is the result).
     run: usize,
     runs: usize,
     done: bool,
