@@ -979,13 +979,10 @@ const YAW_TURNS: [f64; 3] = [0.0, -0.6, 0.6];
 
 /// Whether a mesh looks alike from every side, as far as its extent tells: equal widths along
 /// X and Z (within 2 %), centred on the Y axis. A mug's handle breaks it, a bare bowl does not.
-fn symmetric_about_y(positions: &[glam::Vec3]) -> bool {
-    let Some(&first) = positions.first() else {
+fn symmetric_about_y(mesh: &crate::generators::Mesh) -> bool {
+    let Some((lo, hi)) = mesh.bounds() else {
         return true;
     };
-    let (lo, hi) = positions
-        .iter()
-        .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
     let size = hi - lo;
     let tol = 0.02 * size.max_element();
     (size.x - size.z).abs() <= tol && (lo.x + hi.x).abs() <= tol && (lo.z + hi.z).abs() <= tol
@@ -1019,7 +1016,7 @@ fn start_points(
         // more than one view, the others tell the turn, and so does a façade's window grid
         // (measured: with window labels the turned seeds only crowded the population, the
         // window test's final loss 0.0245 with them against 0.0076 without).
-        let turns = if !turn || stats.len() > 1 || symmetric_about_y(&mesh.positions) {
+        let turns = if !turn || stats.len() > 1 || symmetric_about_y(&mesh) {
             &YAW_TURNS[..1]
         } else {
             &YAW_TURNS[..]
