@@ -182,28 +182,13 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
         if p.done || t - last_draw > 0.2 {
             last_draw = t;
             let frac = if p.work_total > 0.0 {
-                (p.work_done / p.work_total).clamp(0.0, 1.0)
+                p.work_done / p.work_total
             } else {
                 0.0
             };
-            let eta = if frac > 0.02 {
-                seconds(t / frac - t)
-            } else {
-                "?".into()
-            };
-            let bar: String = (0..30)
-                .map(|i| if (i as f64) < frac * 30.0 { '#' } else { '.' })
-                .collect();
-            let _ = write!(
-                stderr,
-                "\r{} ×{} stage {}/3 [{bar}] {:>3.0}% {} evals, loss {:.5}, ETA {eta}   ",
-                p.generator,
-                p.runs,
-                p.stage,
-                100.0 * frac,
-                p.evaluations,
-                p.best_loss
-            );
+            let name = format!("{} ×{}", p.generator, p.runs);
+            let rest = format!("{} evals, loss {:.5}", p.evaluations, p.best_loss);
+            let _ = write!(stderr, "{}", progress_bar(&name, p.stage, frac, t, &rest));
             let _ = stderr.flush();
         }
         if p.done {

@@ -147,6 +147,22 @@ async function runFit({ fitId, generator, seed = 1, quality = 1, start = [], mas
     windowFlags,
     windowCodes,
   );
+  return stepFit(fitId, session, emit, (due) => {
+    // The silhouette preview of the best model so far (0..255 coverage), with each progress.
+    const w = due ? session.previewWidth() : 0;
+    if (!w) return [null, []];
+    const coverage = session.previewCoverage();
+    return [{ width: w, height: session.previewHeight(), coverage: coverage.buffer }, [coverage.buffer]];
+  });
+}
+
+/**
+ * Steps a fit session (FitSession or TreeFitSession) in slices until it is done or cancelled,
+ * emitting progress at stage changes, at least every PROGRESS_MS and whenever `preview(due)`
+ * returns a picture ([picture, transfer]; `due` says progress goes out anyway); frees the
+ * session at the end.
+ */
+async function stepFit(fitId, session, emit, preview) {
   const job = { cancelled: false };
   fits.set(fitId, job);
   try {
@@ -155,18 +171,12 @@ async function runFit({ fitId, generator, seed = 1, quality = 1, start = [], mas
     for (;;) {
       const p = session.step();
       const now = performance.now();
-      if (p.done || p.stage !== stage || now - last >= PROGRESS_MS) {
+      const due = p.done || p.stage !== stage || now - last >= PROGRESS_MS;
+      const [picture, transfer] = preview(due);
+      if (picture || due) {
         last = now;
         stage = p.stage;
-        const w = session.previewWidth();
-        let preview = null;
-        const transfer = [];
-        if (w) {
-          const coverage = session.previewCoverage();
-          preview = { width: w, height: session.previewHeight(), coverage: coverage.buffer };
-          transfer.push(coverage.buffer);
-        }
-        emit('progress', { ...p, preview }, transfer);
+        emit('progress', { ...p, preview: picture }, transfer);
       }
       if (p.done || job.cancelled) break;
       await tick();
@@ -186,37 +196,13 @@ const TREE_EVALUATIONS = 4700;
 async function runTreeFit({ fitId, seed = 1, quality = 1, width, height, rgba, codes }, emit) {
   const budget = quality === 1 ? 0 : Math.max(200, Math.round(TREE_EVALUATIONS * quality));
   const session = new wasm.TreeFitSession(width, height, new Uint8Array(rgba), new Uint8Array(codes ?? 0), seed, budget);
-  const job = { cancelled: false };
-  fits.set(fitId, job);
-  try {
-    let last = 0;
-    let stage = 0;
-    for (;;) {
-      const p = session.step();
-      const now = performance.now();
-      // A preview comes only with the step that changed the best tree: always pass it on.
-      const w = session.previewWidth();
-      if (w || p.done || p.stage !== stage || now - last >= PROGRESS_MS) {
-        last = now;
-        stage = p.stage;
-        let preview = null;
-        const transfer = [];
-        if (w) {
-          const labels = session.previewLabels();
-          preview = { width: w, height: session.previewHeight(), labels: labels.buffer };
-          transfer.push(labels.buffer);
-        }
-        emit('progress', { ...p, preview }, transfer);
-      }
-      if (p.done || job.cancelled) break;
-      await tick();
-      if (job.cancelled) break;
-    }
-    return { cancelled: job.cancelled, result: session.result() };
-  } finally {
-    fits.delete(fitId);
-    session.free();
-  }
+  return stepFit(fitId, session, emit, () => {
+    // A preview comes only with the step that changed the best tree: always pass it on.
+    const w = session.previewWidth();
+    if (!w) return [null, []];
+    const labels = session.previewLabels();
+    return [{ width: w, height: session.previewHeight(), labels: labels.buffer }, [labels.buffer]];
+  });
 }
 
 /** A handler's result whose buffers move to the page instead of being copied. */
