@@ -8,6 +8,9 @@
 //! `cargo bench --bench tree` prints markdown tables; `-- --quick` cuts the GA budget by 4 and
 //! skips Algorithm 3 for a fast look.
 
+#[path = "../tests/tree_support/mod.rs"]
+mod tree_support;
+
 use procfit::generators::tree::{TreeGenerator, idx};
 use procfit::generators::{Generator, Lod};
 use procfit::tree::ga::GaConfig;
@@ -15,6 +18,7 @@ use procfit::tree::impostor::{TreeFitConfig, TreeImpostor, fit_tree, silhouette_
 use procfit::tree::mutation::MutationStats;
 use procfit::tree::similarity::TreeTraits;
 use std::time::Instant;
+use tree_support::targets;
 
 fn median_ms(runs: usize, mut f: impl FnMut()) -> f64 {
     let mut t: Vec<f64> = (0..runs)
@@ -26,32 +30,6 @@ fn median_ms(runs: usize, mut f: impl FnMut()) -> f64 {
         .collect();
     t.sort_by(f64::total_cmp);
     t[runs / 2]
-}
-
-/// Three trees that are not presets: presets with a new seed and changed proportions.
-fn targets() -> Vec<(&'static str, Vec<f64>)> {
-    let g = TreeGenerator;
-    let p = |n: &str| {
-        g.preset(n)
-            .map(|p| p.values)
-            .unwrap_or_else(|| g.defaults())
-    };
-    let mut a = p("oak");
-    a[idx::SEED] = 77.0;
-    a[idx::HEIGHT] = 10.0;
-    a[idx::SHAPE] = 1.0;
-    a[idx::SPLITS] = 1.0;
-    let mut b = p("birch");
-    b[idx::SEED] = 12.0;
-    b[idx::HEIGHT] = 13.0;
-    b[idx::LEVEL0 + 1] = 0.4;
-    b[idx::TROPISM] = 0.0;
-    let mut c = p("willow");
-    c[idx::SEED] = 301.0;
-    c[idx::HEIGHT] = 11.0;
-    c[idx::TROPISM] = -0.6;
-    c[idx::BASE_SIZE] = 0.35;
-    vec![("oak-like", a), ("birch-like", b), ("willow-like", c)]
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

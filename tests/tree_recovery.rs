@@ -8,7 +8,9 @@
 //! leaf-cluster generator and the preset-seeded, fixed-seed fit: IoU-64 ≈ 0.21). The mutation
 //! comparison runs 18 small fits (about 1.5 minutes).
 
-use procfit::generators::tree::{TreeGenerator, idx};
+mod tree_support;
+
+use procfit::generators::tree::TreeGenerator;
 use procfit::generators::{Generator, Lod};
 use procfit::mask::LabelImage;
 use procfit::tree::impostor::{
@@ -16,29 +18,7 @@ use procfit::tree::impostor::{
 };
 use procfit::tree::mutation::MutationStats;
 use procfit::tree::similarity::TreeTraits;
-
-/// Three trees that are not presets: presets with another seed and changed proportions (the
-/// same three as `benches/tree.rs`).
-fn targets() -> Vec<(&'static str, Vec<f64>)> {
-    let g = TreeGenerator;
-    let p = |n: &str| g.preset(n).expect("preset").values;
-    let mut a = p("oak");
-    a[idx::SEED] = 77.0;
-    a[idx::HEIGHT] = 10.0;
-    a[idx::SHAPE] = 1.0;
-    a[idx::SPLITS] = 1.0;
-    let mut b = p("birch");
-    b[idx::SEED] = 12.0;
-    b[idx::HEIGHT] = 13.0;
-    b[idx::LEVEL0 + 1] = 0.4;
-    b[idx::TROPISM] = 0.0;
-    let mut c = p("willow");
-    c[idx::SEED] = 301.0;
-    c[idx::HEIGHT] = 11.0;
-    c[idx::TROPISM] = -0.6;
-    c[idx::BASE_SIZE] = 0.35;
-    vec![("oak-like", a), ("birch-like", b), ("willow-like", c)]
-}
+use tree_support::targets;
 
 fn reference(truth: &[f64], size: u32) -> LabelImage {
     let view = tree_view(size, size, 12.0).expect("view");
