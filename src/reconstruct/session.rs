@@ -25,8 +25,8 @@ use std::sync::Arc;
 
 /// Stage-1 evaluations at quality 1: the reference schedule's ~5000 at 128² (notes "Optimisers
 /// and schedule"). Measured (benches/reconstruct.rs): buildings gain from it (mean IoU-64 0.89 →
-/// 0.96 over 2000), dishes are limited by what one view can tell, and a fit takes ~2–3 s
-/// natively.
+/// 0.96 over 2000), dishes are limited by what one view can tell, and one run takes ~2–3 s
+/// natively (a fit makes [`FitConfig::restarts`] of them side by side: ~4 s on 2 threads).
 pub const DEFAULT_EVALUATIONS: usize = 5000;
 
 /// Largest number of [`FitConfig::restarts`].
