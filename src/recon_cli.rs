@@ -210,13 +210,7 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
             reconstruct::export_camera(v, name)
         })
         .collect();
-    let glb = glb::export_model(&model, &cameras).map_err(|e| e.to_string())?;
-    std::fs::write(&a.output, &glb)
-        .map_err(|e| format!("cannot write {}: {e}", a.output.display()))?;
-    if let Some(path) = &a.params_out {
-        std::fs::write(path, model.to_json())
-            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-    }
+    write_outputs(a, &model, &cameras)?;
     println!(
         "wrote {}: {} fitted to {} view(s) in {:.1} s, {} evaluations, loss {:.5}",
         a.output.display(),
@@ -309,13 +303,7 @@ fn reconstruct_tree(a: &ReconstructArgs) -> Result<(), String> {
     let photo_view = framing.photo_view().map_err(|e| e.to_string())?;
     let name = image.file_name().map(|n| n.to_string_lossy().into_owned());
     let cameras = [reconstruct::export_camera(&photo_view, name)];
-    let glb = glb::export_model(&model, &cameras).map_err(|e| e.to_string())?;
-    std::fs::write(&a.output, &glb)
-        .map_err(|e| format!("cannot write {}: {e}", a.output.display()))?;
-    if let Some(path) = &a.params_out {
-        std::fs::write(path, model.to_json())
-            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-    }
+    write_outputs(a, &model, &cameras)?;
     println!(
         "wrote {}: tree fitted to 1 view in {:.1} s, {} evaluations, similarity {:.3}",
         a.output.display(),
@@ -323,6 +311,22 @@ fn reconstruct_tree(a: &ReconstructArgs) -> Result<(), String> {
         fit.ga.evaluations,
         fit.similarity
     );
+    Ok(())
+}
+
+/// Writes the GLB (the model and its cameras) to `-o` and the params JSON to `--params-out`.
+fn write_outputs(
+    a: &ReconstructArgs,
+    model: &Model,
+    cameras: &[procfit::glb::ExportCamera],
+) -> Result<(), String> {
+    let glb = glb::export_model(model, cameras).map_err(|e| e.to_string())?;
+    std::fs::write(&a.output, &glb)
+        .map_err(|e| format!("cannot write {}: {e}", a.output.display()))?;
+    if let Some(path) = &a.params_out {
+        std::fs::write(path, model.to_json())
+            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    }
     Ok(())
 }
 

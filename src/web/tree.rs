@@ -93,14 +93,18 @@ impl TreeFitSession {
 /// 1 branch, 2 leaf, 255 don't care, row-major; for the page's preview over the photo.
 #[wasm_bindgen(js_name = treeLabels)]
 pub fn tree_labels(width: u32, height: u32, rgba: &[u8], codes: &[u8]) -> Result<Vec<u8>, JsError> {
+    Ok(photo_labels(width, height, rgba, codes)?.labels().to_vec())
+}
+
+/// A photo's tree labels by colour, limited to its mask (`codes`; empty: the whole photo).
+fn photo_labels(width: u32, height: u32, rgba: &[u8], codes: &[u8]) -> Result<LabelImage, JsError> {
     let labels =
         labels_from_rgb(width, height, rgba, 4, &ColorThresholds::default()).map_err(js)?;
-    let labels = if codes.is_empty() {
-        labels
+    if codes.is_empty() {
+        Ok(labels)
     } else {
-        apply_mask_codes(&labels, codes).map_err(js)?
-    };
-    Ok(labels.labels().to_vec())
+        apply_mask_codes(&labels, codes).map_err(js)
+    }
 }
 
 #[wasm_bindgen]
@@ -115,14 +119,7 @@ impl TreeFitSession {
         seed: u32,
         budget: u32,
     ) -> Result<TreeFitSession, JsError> {
-        let labels =
-            labels_from_rgb(width, height, rgba, 4, &ColorThresholds::default()).map_err(js)?;
-        let labels = if codes.is_empty() {
-            labels
-        } else {
-            apply_mask_codes(&labels, codes).map_err(js)?
-        };
-        TreeFitSession::start(&labels, seed, budget)
+        TreeFitSession::start(&photo_labels(width, height, rgba, codes)?, seed, budget)
     }
 
     /// Starts a fit to a label image (0 background, 1 branch, 2 leaf, 255 don't care).
