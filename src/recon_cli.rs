@@ -107,12 +107,17 @@ fn load_mask(path: &Path) -> Result<Mask, String> {
     Ok(load_view(path)?.0)
 }
 
-/// A view's mask and, for a photo with EXIF, its field of view.
-fn load_view(path: &Path) -> Result<(Mask, Option<f64>), String> {
+/// An image file's bytes and its pixels as RGBA; a one-line error when it is not an image.
+fn read_image(path: &Path) -> Result<(Vec<u8>, image::RgbaImage), String> {
     let bytes = read(path)?;
     let img = image::load_from_memory(&bytes)
         .map_err(|e| format!("{}: not a readable image ({e})", path.display()))?;
-    let rgba = img.to_rgba8();
+    Ok((bytes, img.to_rgba8()))
+}
+
+/// A view's mask and, for a photo with EXIF, its field of view.
+fn load_view(path: &Path) -> Result<(Mask, Option<f64>), String> {
+    let (bytes, rgba) = read_image(path)?;
     let (w, h) = rgba.dimensions();
     let px = rgba.as_raw();
     let transparent = px.chunks_exact(4).any(|p| p[3] < 128);
@@ -244,10 +249,7 @@ fn progress_bar(name: &str, stage: u8, frac: f64, t: f64, rest: &str) -> String 
 /// 255 is taken as labels, anything else as a photo labelled by colour.
 fn load_tree_labels(path: &Path) -> Result<procfit::mask::LabelImage, String> {
     use procfit::tree::labels;
-    let bytes = read(path)?;
-    let img = image::load_from_memory(&bytes)
-        .map_err(|e| format!("{}: not a readable image ({e})", path.display()))?;
-    let rgba = img.to_rgba8();
+    let (_, rgba) = read_image(path)?;
     let (w, h) = rgba.dimensions();
     let px = rgba.as_raw();
     let is_labels = px
