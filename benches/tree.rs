@@ -6,7 +6,9 @@
 //! MEDIUM meshes) and wall time on 2 threads. The paper took 29 min; the target is ≤ 60 s.
 //!
 //! `cargo bench --bench tree` prints markdown tables; `-- --quick` cuts the GA budget by 4 and
-//! skips Algorithm 3 for a fast look.
+//! skips Algorithm 3 for a fast look; `-- --mutation` adds the full comparison of Algorithm 3
+//! against Gaussian mutation (27 short fits per setting and 9 default fits per mutation, about
+//! ten minutes on 2 cores).
 
 #[path = "../tests/tree_support/mod.rs"]
 mod tree_support;
@@ -34,6 +36,7 @@ fn median_ms(runs: usize, mut f: impl FnMut()) -> f64 {
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let quick = std::env::args().any(|a| a == "--quick");
+    let mutation_table = std::env::args().any(|a| a == "--mutation");
     let g = TreeGenerator;
 
     println!("## Generator: milliseconds per tree (median)\n");
@@ -154,5 +157,113 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "| **mean** | algorithm 3 | {:.3} | {:.3} | |",
         sums[1].0, sums[1].1
     );
+    if mutation_table {
+        compare_mutations(&stats)?;
+    }
+    Ok(())
+}
+
+/// Mean and standard error.
+fn mean_se(v: &[f64]) -> (f64, f64) {
+    let n = v.len() as f64;
+    let m = v.iter().sum::<f64>() / n;
+    let var = v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
+    (m, (var / n).sqrt())
+}
+
+/// Algorithm 3 against Gaussian mutation, over 3 trees × 9 GA seeds at a short budget (the
+/// GA alone, 96²) from preset-seeded and from all-random starts, and over 3 trees × 3 seeds
+/// at the default budget with the paper's IoU-64.
+fn compare_mutations(stats: &MutationStats) -> Result<(), Box<dyn std::error::Error>> {
+    let g = TreeGenerator;
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
+    let short = tree_view(96, 96, 12.0)?;
+    let mut imp = TreeImpostor::new(short)?;
+    let refs: Vec<_> = targets()
+        .iter()
+        .map(|(_, t)| imp.render(&g.generate(t, Lod::Low)?).map_err(Into::into))
+        .collect::<Result<_, Box<dyn std::error::Error>>>()?;
+    let arms: [(&str, bool, Option<usize>); 5] = [
+        ("from presets", true, None),
+        ("from presets", true, Some(500)),
+        ("from presets", true, Some(20)),
+        ("all random (paper)", false, None),
+        ("all random (paper)", false, Some(500)),
+    ];
+    let mut cfg = TreeFitConfig::default();
+    cfg.ga.generations = 5;
+    cfg.seed_trials = 0;
+    cfg.polish = 0;
+    println!(
+        "\n## Mutation: best similarity, 3 trees × 9 seeds, {} GA evaluations, 96²\n",
+        cfg.evaluations()
+    );
+    println!("| start | mutation | mean ± s.e. | minus gaussian (paired by tree and seed) |");
+    println!("|---|---|---|---|");
+    let mut gauss: Vec<f64> = Vec::new();
+    for (start, presets, candidates) in arms {
+        let mut v = Vec::new();
+        for reference in &refs {
+            for seed in 1..=9 {
+                let mut c = cfg;
+                c.start_from_presets = presets;
+                c.ga.seed = seed;
+                c.ga.quality_steps = candidates.unwrap_or(0);
+                let m = candidates.map(|_| stats);
+                v.push(
+                    pool.install(|| fit_tree(reference, TreeTraits::default(), short, &c, m))?
+                        .similarity,
+                );
+            }
+        }
+        let label = match candidates {
+            None => "gaussian".to_string(),
+            Some(k) => format!("algorithm 3, {k} candidates"),
+        };
+        if candidates.is_none() {
+            gauss = v.clone();
+        }
+        let (m, se) = mean_se(&v);
+        let d: Vec<f64> = v.iter().zip(&gauss).map(|(a, b)| a - b).collect();
+        let (dm, dse) = mean_se(&d);
+        println!("| {start} | {label} | {m:.3} ± {se:.3} | {dm:+.3} ± {dse:.3} |");
+    }
+
+    let size = 128;
+    let view = tree_view(size, size, 12.0)?;
+    let mut imp = TreeImpostor::new(view)?;
+    let cfg = TreeFitConfig::default();
+    println!(
+        "\n## Mutation at the default budget ({} evaluations, {size}²): 3 trees × 3 seeds\n",
+        cfg.evaluations()
+    );
+    println!("| mutation | similarity mean ± s.e. | IoU-64 mean ± s.e. |");
+    println!("|---|---|---|");
+    for m in [None, Some(stats)] {
+        let (mut sim, mut iou) = (Vec::new(), Vec::new());
+        for (_, truth) in targets() {
+            let reference = imp.render(&g.generate(&truth, Lod::Low)?)?;
+            let truth_mesh = g.generate(&truth, Lod::Medium)?;
+            for seed in 1..=3 {
+                let mut c = cfg;
+                c.ga.seed = seed;
+                let fit =
+                    pool.install(|| fit_tree(&reference, TreeTraits::default(), view, &c, m))?;
+                sim.push(fit.similarity);
+                iou.push(silhouette_iou64(
+                    &truth_mesh,
+                    &g.generate(&fit.params, Lod::Medium)?,
+                    128,
+                )?);
+            }
+        }
+        let ((s, sse), (i, ise)) = (mean_se(&sim), mean_se(&iou));
+        let label = if m.is_none() {
+            "gaussian"
+        } else {
+            "algorithm 3"
+        };
+        println!("| {label} | {s:.3} ± {sse:.3} | {i:.3} ± {ise:.3} |");
+    }
     Ok(())
 }
