@@ -49,6 +49,12 @@ pub struct ReconstructArgs {
     /// Also write the parameters as params JSON here.
     #[arg(long)]
     params_out: Option<PathBuf>,
+    /// Trees: the colour rules that label a photo, as JSON with any of the fields leafHue,
+    /// leafMinSaturation, leafMinValue, barkHue, barkSaturation, barkValue, greyMaxSaturation,
+    /// restAsBranch (hues in degrees, a range that starts above its end wraps through red; the
+    /// rest within 0–1), e.g. '{"leafHue":[330,170],"leafMinValue":0.45}' for autumn leaves.
+    #[arg(long)]
+    tree_colors: Option<String>,
 }
 
 /// `procfit render`.
@@ -160,6 +166,9 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
     if a.generator == "tree" {
         return reconstruct_tree(a);
     }
+    if a.tree_colors.is_some() {
+        return Err("--tree-colors is for --generator tree".into());
+    }
     let views = a
         .images
         .iter()
@@ -247,8 +256,20 @@ fn progress_bar(name: &str, stage: u8, frac: f64, t: f64, rest: &str) -> String 
 
 /// A tree's label image from a file: a grey image holding only the label values 0, 1, 2 and
 /// 255 is taken as labels, anything else as a photo labelled by colour.
-fn load_tree_labels(path: &Path) -> Result<procfit::mask::LabelImage, String> {
+fn load_tree_labels(
+    path: &Path,
+    colors: Option<&str>,
+) -> Result<procfit::mask::LabelImage, String> {
     use procfit::tree::labels;
+    let thresholds = match colors {
+        None => labels::ColorThresholds::default(),
+        Some(text) => {
+            let t: labels::ColorThresholds =
+                serde_json::from_str(text).map_err(|e| format!("--tree-colors: {e}"))?;
+            t.check().map_err(|e| format!("--tree-colors: {e}"))?;
+            t
+        }
+    };
     let (_, rgba) = read_image(path)?;
     let (w, h) = rgba.dimensions();
     let px = rgba.as_raw();
@@ -258,7 +279,7 @@ fn load_tree_labels(path: &Path) -> Result<procfit::mask::LabelImage, String> {
     let result = if is_labels {
         labels::labels_from_values(w, h, px.chunks_exact(4).map(|p| p[0]).collect())
     } else {
-        labels::labels_from_rgb(w, h, px, 4, &labels::ColorThresholds::default())
+        labels::labels_from_rgb(w, h, px, 4, &thresholds)
     };
     result.map_err(|e| format!("{}: {e}", path.display()))
 }
@@ -272,7 +293,7 @@ fn reconstruct_tree(a: &ReconstructArgs) -> Result<(), String> {
             a.images.len()
         ));
     };
-    let labels = load_tree_labels(image)?;
+    let labels = load_tree_labels(image, a.tree_colors.as_deref())?;
     let procfit::tree::impostor::PhotoTreeFit {
         mut session,
         framing,

@@ -161,3 +161,50 @@ fn bad_tree_masks_give_one_line_and_failure() {
     ]);
     assert!(String::from_utf8_lossy(&two.stderr).contains("one image"));
 }
+
+#[test]
+fn tree_colors_label_an_autumn_photo() {
+    // Orange leaves over a brown trunk against sky: not foliage by the default colours.
+    let photo = scratch("autumn.png");
+    image::RgbImage::from_fn(96, 96, |x, y| {
+        let crown = (x as f32 - 48.0).powi(2) / 900.0 + (y as f32 - 34.0).powi(2) / 500.0 < 1.0;
+        let trunk = x.abs_diff(48) < 4 && (40..90).contains(&y);
+        image::Rgb(if crown {
+            [225, 120, 35]
+        } else if trunk {
+            [90, 60, 35]
+        } else {
+            [135, 190, 235]
+        })
+    })
+    .save(&photo)
+    .expect("png");
+    let run = |extra: &[&str]| {
+        let mut args = vec!["reconstruct", "--generator", "tree", "--budget", "200"];
+        args.extend_from_slice(extra);
+        let glb = scratch("autumn.glb");
+        args.extend_from_slice(&[s(&photo), "-o", s(&glb)]);
+        let out = procfit(&args);
+        (
+            out.status.success(),
+            String::from_utf8_lossy(&out.stderr).to_string(),
+        )
+    };
+    let (ok, err) = run(&[]);
+    assert!(!ok && err.contains("no leaf"), "default colours: {err}");
+    let (ok, err) = run(&[
+        "--tree-colors",
+        r#"{"leafHue":[330,170],"leafMinValue":0.45}"#,
+    ]);
+    assert!(ok, "autumn colours: {err}");
+    for (bad, needle) in [
+        (r#"{"leafHue":[0,400]}"#, "0–360"),
+        (r#"{"leafHew":[1,2]}"#, "unknown field"),
+        ("not json", "--tree-colors"),
+    ] {
+        let (ok, err) = run(&["--tree-colors", bad]);
+        assert!(!ok, "{bad} should fail");
+        assert_eq!(err.trim_end().lines().count(), 1, "{bad}: {err}");
+        assert!(err.contains(needle), "{bad}: `{err}` lacks `{needle}`");
+    }
+}

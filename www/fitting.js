@@ -3,7 +3,7 @@
 // and a cancel button, and hands the fitted model to the editor. The worker runs the fit in
 // slices, so the page — and the sliders — stay responsive meanwhile.
 import { REQUESTS } from './protocol.js';
-import { fitCodes, fitWindows, photoPixels } from './masking.js';
+import { fitCodes, fitWindows, photoPixels, treeColors } from './masking.js';
 
 /** What each stage does, in words (see reconstruct::session). */
 export const STAGES = {
@@ -99,7 +99,7 @@ export class FitRunner extends EventTarget {
     try {
       const out = await this.client.call(
         REQUESTS.TREE_RUN,
-        { fitId, seed: 1, quality, width, height, rgba, codes },
+        { fitId, seed: 1, quality, width, height, rgba, codes, colors: treeColors(photo) },
         {
           transfer: [rgba, codes],
           onEvent: (event, data) => {

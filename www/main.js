@@ -9,7 +9,7 @@ import * as store from './store.js';
 import { CameraCapture } from './camera.js';
 import { Viewer } from './viewer.js';
 import { Editor, LODS } from './editor.js';
-import { MaskEditor, autoMask, reviveMask, detectWindows, treeLabels, WINDOW } from './masking.js';
+import { MaskEditor, autoMask, reviveMask, detectWindows, treeLabels, treeColors, TREE_COLORS, AUTUMN_COLORS, WINDOW } from './masking.js';
 import { FitRunner } from './fitting.js';
 
 const $ = (id) => document.getElementById(id);
@@ -247,26 +247,35 @@ function renderTreeLabels() {
   const tree = fitGenerator() === 'tree';
   const line = $('tree-state');
   line.hidden = !tree || !photo?.mask;
+  $('tree-colors').hidden = line.hidden;
   if (maskEditor.showTree !== tree) {
     maskEditor.showTree = tree;
     maskEditor.draw();
   }
   if (line.hidden) return;
+  showTreeColors(photo);
   const labels = photo.treeLabels;
-  if (!labels || photo.treeLabelsFor !== photo.mask.codes) {
+  const colorsKey = JSON.stringify(treeColors(photo));
+  // Made again when the mask or the colours change (an error counts as an answer too).
+  if (photo.treeLabelsFor !== photo.mask.codes || photo.treeLabelsColors !== colorsKey) {
     line.textContent = 'Sorting branches from leaves…';
+    // One request at a time; the last one's answer is checked against the photo's colours
+    // and mask again, so quick slider moves end with the labels of the final values.
+    if (photo.treeLabelsPending) return;
+    photo.treeLabelsPending = true;
     const codes = photo.mask.codes;
     treeLabels(client, photo)
       .then(() => {
-        photo.treeLabelsFor = codes;
         photo.treeError = null;
       })
       .catch((err) => {
         photo.treeLabels = null;
-        photo.treeLabelsFor = codes;
         photo.treeError = err.message;
       })
       .finally(() => {
+        photo.treeLabelsFor = codes;
+        photo.treeLabelsColors = colorsKey;
+        photo.treeLabelsPending = false;
         if (state.selected !== photo.id) return;
         maskEditor.draw();
         renderTreeLabels();
@@ -284,8 +293,52 @@ function renderTreeLabels() {
     else if (l === 2) leaf += 1;
   }
   const all = Math.max(1, branch + leaf);
-  line.textContent = `What the tree fit sees, by colour: branches in brown (${Math.round((100 * branch) / all)} %), leaves in green (${Math.round((100 * leaf) / all)} %). Trees are fitted to one photo, the first.`;
+  const missing = !leaf ? 'No leaves found by their colour: if they are not green, open "Adjust the colours" (autumn leaves, say). ' : !branch ? 'No trunk or branches found by their colour: open "Adjust the colours" (or count everything else inside the mask as branches). ' : '';
+  line.textContent = `${missing}What the tree fit sees, by colour: branches in brown (${Math.round((100 * branch) / all)} %), leaves in green (${Math.round((100 * leaf) / all)} %). Trees are fitted to one photo, the first.`;
 }
+
+/** The "Adjust the colours" controls show `photo`'s colour rules. */
+function showTreeColors(photo) {
+  const c = treeColors(photo);
+  const set = (id, v, text) => {
+    $(id).value = String(v);
+    $(`${id}-out`).textContent = text;
+  };
+  set('leaf-hue-from', c.leafHue[0], `${c.leafHue[0]}°`);
+  set('leaf-hue-to', c.leafHue[1], `${c.leafHue[1]}°`);
+  set('leaf-min-value', c.leafMinValue, c.leafMinValue.toFixed(2));
+  set('leaf-min-saturation', c.leafMinSaturation, c.leafMinSaturation.toFixed(2));
+  set('bark-max-value', c.barkValue[1], c.barkValue[1].toFixed(2));
+  $('rest-as-branch').checked = c.restAsBranch;
+  // The hue strip: the chosen leaf hues bright, the rest faded (a range may wrap through red).
+  const strip = $('leaf-hue-strip');
+  const ctx = strip.getContext('2d');
+  const [lo, hi] = c.leafHue;
+  for (let h = 0; h < 360; h += 1) {
+    const on = lo <= hi ? h >= lo && h <= hi : h >= lo || h <= hi;
+    ctx.fillStyle = `hsl(${h} ${on ? 75 : 18}% ${on ? 45 : 80}%)`;
+    ctx.fillRect(h, 0, 1, strip.height);
+  }
+}
+
+/** Changes the selected photo's colour rules and sorts its pixels again. */
+function changeTreeColors(change) {
+  const photo = state.photos.find((p) => p.id === state.selected);
+  if (!photo) return;
+  photo.treeColors = change === null ? null : { ...treeColors(photo), ...change };
+  renderTreeLabels();
+  persist();
+}
+
+for (const [id, field] of [['leaf-min-value', 'leafMinValue'], ['leaf-min-saturation', 'leafMinSaturation']]) {
+  $(id).addEventListener('input', (e) => changeTreeColors({ [field]: Number(e.target.value) }));
+}
+$('leaf-hue-from').addEventListener('input', (e) => changeTreeColors({ leafHue: [Number(e.target.value), Number($('leaf-hue-to').value)] }));
+$('leaf-hue-to').addEventListener('input', (e) => changeTreeColors({ leafHue: [Number($('leaf-hue-from').value), Number(e.target.value)] }));
+$('bark-max-value').addEventListener('input', (e) => changeTreeColors({ barkValue: [TREE_COLORS.barkValue[0], Number(e.target.value)] }));
+$('rest-as-branch').addEventListener('change', (e) => changeTreeColors({ restAsBranch: e.target.checked }));
+$('colors-autumn').addEventListener('click', () => changeTreeColors({ ...AUTUMN_COLORS }));
+$('colors-reset').addEventListener('click', () => changeTreeColors(null));
 
 function renderMaskState() {
   const box = $('mask-state');

@@ -1,5 +1,5 @@
 // Work is not lost: the session (downscaled photos with their EXIF focal lengths, their masks,
-// the box and strokes that corrected them, don't-care strokes and window labels, the model's generator, parameters, level of detail and starting
+// the box and strokes that corrected them, don't-care strokes, window labels and tree colours, the model's generator, parameters, level of detail and starting
 // point) is kept in IndexedDB on this device and restored when the page is opened again.
 // Nothing here leaves the device.
 
@@ -66,6 +66,8 @@ export async function photoRecord(p) {
     edits: p.edits ?? [],
     // Window labels (buildings) and the strokes they came from.
     windows: p.windows ? { codes: p.windows.codes, strokes: p.windows.strokes ?? [] } : null,
+    // Trees: the photo's colour rules for leaves and branches, when the user changed them.
+    treeColors: p.treeColors ?? null,
   };
   if (p.mask) {
     const { codes, dontCare, ...info } = p.mask;
@@ -87,6 +89,7 @@ export async function photoFromRecord(rec) {
     focal35mm: rec.focal35mm ?? null,
     edits: Array.isArray(rec.edits) ? rec.edits : [],
     windows: rec.windows?.codes ? { codes: new Uint8Array(rec.windows.codes), strokes: rec.windows.strokes ?? [] } : null,
+    treeColors: rec.treeColors && typeof rec.treeColors === 'object' ? rec.treeColors : null,
   };
   if (rec.mask) {
     const { dontCare, ...mask } = rec.mask;

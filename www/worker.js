@@ -70,8 +70,8 @@ const handlers = {
     return { focal_35mm: f > 0 ? f : null };
   },
   [REQUESTS.FIT_RUN]: (payload, emit) => runFit(payload, emit),
-  [REQUESTS.TREE_LABELS]: ({ width, height, rgba, codes }) => {
-    const labels = wasm.treeLabels(width, height, new Uint8Array(rgba), new Uint8Array(codes ?? 0));
+  [REQUESTS.TREE_LABELS]: ({ width, height, rgba, codes, colors }) => {
+    const labels = wasm.treeLabels(width, height, new Uint8Array(rgba), new Uint8Array(codes ?? 0), colors ?? undefined);
     return new Transfer({ width, height, labels: labels.buffer }, [labels.buffer]);
   },
   [REQUESTS.TREE_RUN]: (payload, emit) => runTreeFit(payload, emit),
@@ -193,9 +193,9 @@ async function stepFit(fitId, session, emit, preview) {
 const TREE_EVALUATIONS = 4700;
 
 /** A tree fit, stepped in slices like runFit. */
-async function runTreeFit({ fitId, seed = 1, quality = 1, width, height, rgba, codes }, emit) {
+async function runTreeFit({ fitId, seed = 1, quality = 1, width, height, rgba, codes, colors }, emit) {
   const budget = quality === 1 ? 0 : Math.max(200, Math.round(TREE_EVALUATIONS * quality));
-  const session = new wasm.TreeFitSession(width, height, new Uint8Array(rgba), new Uint8Array(codes ?? 0), seed, budget);
+  const session = new wasm.TreeFitSession(width, height, new Uint8Array(rgba), new Uint8Array(codes ?? 0), seed, budget, colors ?? undefined);
   return stepFit(fitId, session, emit, () => {
     // A preview comes only with the step that changed the best tree: always pass it on.
     const w = session.previewWidth();

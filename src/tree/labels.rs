@@ -4,10 +4,16 @@
 
 use super::{BACKGROUND, BRANCH, LEAF};
 use crate::mask::{LabelImage, MaskError};
+use serde::{Deserialize, Serialize};
 
 /// Colour rules for [`labels_from_rgb`], in HSV with hue in degrees and saturation/value in
 /// `[0, 1]`. The defaults suit daylight photos of trees against sky, grass-free ground or walls.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// A hue range whose start is above its end wraps through red (`(330, 170)`: red, orange,
+/// yellow and green — autumn leaves). In JSON (the page's "Adjust colours"), fields are
+/// camelCase and any left out keep their defaults; [`ColorThresholds::check`] refuses
+/// values out of range.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, rename_all = "camelCase", deny_unknown_fields)]
 pub struct ColorThresholds {
     /// Hue range of foliage (yellow-green to blue-green).
     pub leaf_hue: (f32, f32),
@@ -23,6 +29,10 @@ pub struct ColorThresholds {
     pub bark_value: (f32, f32),
     /// Greys (saturation at most this) in the bark value range count as bark (birch, beech).
     pub grey_max_saturation: f32,
+    /// Colours that are neither foliage nor bark count as branch instead of background: for
+    /// labels limited to an object mask ([`apply_mask_codes`]), where everything inside is tree
+    /// (dark trunks in shade, painted or lichen-covered bark).
+    pub rest_as_branch: bool,
 }
 
 impl Default for ColorThresholds {
@@ -35,7 +45,54 @@ impl Default for ColorThresholds {
             bark_saturation: (0.12, 0.8),
             bark_value: (0.08, 0.6),
             grey_max_saturation: 0.12,
+            rest_as_branch: false,
         }
+    }
+}
+
+impl ColorThresholds {
+    /// Errors, in words, on a hue outside `[0, 360]`, a saturation or value outside `[0, 1]`,
+    /// a range whose start is above its end (hues excepted: they wrap) or a non-finite number.
+    pub fn check(&self) -> Result<(), MaskError> {
+        let bad = |m: String| Err(MaskError(m));
+        for (name, (lo, hi)) in [("leaf hue", self.leaf_hue), ("bark hue", self.bark_hue)] {
+            if !(lo.is_finite()
+                && hi.is_finite()
+                && (0.0..=360.0).contains(&lo)
+                && (0.0..=360.0).contains(&hi))
+            {
+                return bad(format!("{name} {lo}–{hi}: hues are degrees in 0–360"));
+            }
+        }
+        for (name, (lo, hi)) in [
+            ("bark saturation", self.bark_saturation),
+            ("bark brightness", self.bark_value),
+        ] {
+            if !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo <= hi && hi <= 1.0) {
+                return bad(format!(
+                    "{name} {lo}–{hi}: a range within 0–1, low end first"
+                ));
+            }
+        }
+        for (name, v) in [
+            ("leaf saturation", self.leaf_min_saturation),
+            ("leaf brightness", self.leaf_min_value),
+            ("grey saturation", self.grey_max_saturation),
+        ] {
+            if !(v.is_finite() && (0.0..=1.0).contains(&v)) {
+                return bad(format!("{name} {v}: must be within 0–1"));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Whether hue `h` lies in `(lo, hi)`, wrapping through 360° when `lo > hi`.
+fn in_hue(h: f32, (lo, hi): (f32, f32)) -> bool {
+    if lo <= hi {
+        (lo..=hi).contains(&h)
+    } else {
+        h >= lo || h <= hi
     }
 }
 
@@ -66,11 +123,12 @@ pub fn rgb_to_hsv(r: u8, g: u8, b: u8) -> (f32, f32, f32) {
 pub fn classify(r: u8, g: u8, b: u8, t: &ColorThresholds) -> u8 {
     let (h, s, v) = rgb_to_hsv(r, g, b);
     let in_range = |x: f32, (lo, hi): (f32, f32)| (lo..=hi).contains(&x);
-    if in_range(h, t.leaf_hue) && s >= t.leaf_min_saturation && v >= t.leaf_min_value {
+    if in_hue(h, t.leaf_hue) && s >= t.leaf_min_saturation && v >= t.leaf_min_value {
         LEAF
-    } else if in_range(v, t.bark_value)
-        && (s <= t.grey_max_saturation
-            || (in_range(h, t.bark_hue) && in_range(s, t.bark_saturation)))
+    } else if t.rest_as_branch
+        || (in_range(v, t.bark_value)
+            && (s <= t.grey_max_saturation
+                || (in_hue(h, t.bark_hue) && in_range(s, t.bark_saturation))))
     {
         BRANCH
     } else {
@@ -92,6 +150,7 @@ pub fn labels_from_rgb(
             "{channels} channels a pixel; expected 3 (RGB) or 4 (RGBA)"
         )));
     }
+    thresholds.check()?;
     let n = width as usize * height as usize;
     if pixels.len() != n * channels {
         return Err(MaskError(format!(
@@ -177,6 +236,67 @@ mod tests {
         check([250, 250, 250], BACKGROUND); // white wall
         check([5, 5, 5], BACKGROUND); // black
         check([200, 40, 40], BACKGROUND); // red car
+    }
+
+    #[test]
+    fn thresholds_adjust_the_labels() {
+        // Autumn: orange and red leaves are background by default, leaves with a hue range
+        // that wraps through red; dark brown bark stays bark when leaves must be bright.
+        let autumn = ColorThresholds {
+            leaf_hue: (330.0, 170.0),
+            leaf_min_value: 0.45,
+            ..ColorThresholds::default()
+        };
+        let orange = [230, 120, 30];
+        let red = [200, 30, 40];
+        let bark = [90, 60, 35];
+        check(orange, BACKGROUND);
+        for (rgb, label) in [
+            (orange, LEAF),
+            (red, LEAF),
+            (bark, BRANCH),
+            ([40, 120, 30], LEAF),
+        ] {
+            assert_eq!(classify(rgb[0], rgb[1], rgb[2], &autumn), label, "{rgb:?}");
+        }
+        // Inside a mask, the rest can be branch: a blue-painted trunk.
+        let rest = ColorThresholds {
+            rest_as_branch: true,
+            ..ColorThresholds::default()
+        };
+        assert_eq!(
+            classify(40, 60, 200, &ColorThresholds::default()),
+            BACKGROUND
+        );
+        assert_eq!(classify(40, 60, 200, &rest), BRANCH);
+        assert_eq!(classify(40, 120, 30, &rest), LEAF);
+    }
+
+    #[test]
+    fn thresholds_read_from_json_and_are_checked() {
+        let t: ColorThresholds =
+            serde_json::from_str(r#"{"leafHue":[20,170],"restAsBranch":true}"#).unwrap();
+        assert_eq!(t.leaf_hue, (20.0, 170.0));
+        assert!(t.rest_as_branch);
+        assert_eq!(t.bark_value, ColorThresholds::default().bark_value);
+        assert!(serde_json::from_str::<ColorThresholds>(r#"{"leafHew":[1,2]}"#).is_err());
+        for bad in [
+            ColorThresholds {
+                leaf_hue: (0.0, 400.0),
+                ..ColorThresholds::default()
+            },
+            ColorThresholds {
+                bark_value: (0.6, 0.1),
+                ..ColorThresholds::default()
+            },
+            ColorThresholds {
+                leaf_min_saturation: f32::NAN,
+                ..ColorThresholds::default()
+            },
+        ] {
+            assert!(bad.check().is_err(), "{bad:?}");
+            assert!(labels_from_rgb(1, 1, &[0, 0, 0], 3, &bad).is_err());
+        }
     }
 
     #[test]

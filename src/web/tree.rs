@@ -9,7 +9,9 @@
 //! // branch); `codes` is the mask step's output (0 background, 128 don't care, else object;
 //! // one byte a pixel) or an empty array to label the whole photo. `budget`: GA evaluations,
 //! // 0 for the default (≈ 4 700).
-//! const fit = new TreeFitSession(width, height, rgba, codes, seed, budget);
+//! // `colors`: the colour rules, an object of `ColorThresholds`' camelCase fields (any left out
+//! // keep their defaults: `{ leafHue: [330, 170], restAsBranch: true }`), or undefined.
+//! const fit = new TreeFitSession(width, height, rgba, codes, seed, budget, colors);
 //! // Or a label image: 0 background, 1 branch, 2 leaf, 255 don't care.
 //! const fit = TreeFitSession.fromLabels(width, height, labels, seed, budget);
 //! // Both throw an Error with a sentence for a mask with no tree, no leaves or no branches.
@@ -19,7 +21,7 @@
 //! if (fit.previewWidth() > 0) {            // the best tree's labels changed in this step
 //!   const labels = fit.previewLabels();    // Uint8Array, previewWidth × previewHeight (128²)
 //! }
-//! const labels = treeLabels(width, height, rgba, codes); // the same labels, for a preview
+//! const labels = treeLabels(width, height, rgba, codes, colors); // the same labels, to show
 //! const r = fit.result(); // { generator: "tree", params, lod, seed, similarity, evaluations,
 //! //                          cameras: Float32Array-able number[18] (yfov, aspect, 16 floats
 //! //                          camera-to-world, column-major): the photo's camera for generateGlb }
@@ -92,14 +94,39 @@ impl TreeFitSession {
 /// The labels a tree fit of this photo would use (see [`TreeFitSession::new`]): 0 background,
 /// 1 branch, 2 leaf, 255 don't care, row-major; for the page's preview over the photo.
 #[wasm_bindgen(js_name = treeLabels)]
-pub fn tree_labels(width: u32, height: u32, rgba: &[u8], codes: &[u8]) -> Result<Vec<u8>, JsError> {
-    Ok(photo_labels(width, height, rgba, codes)?.labels().to_vec())
+pub fn tree_labels(
+    width: u32,
+    height: u32,
+    rgba: &[u8],
+    codes: &[u8],
+    colors: JsValue,
+) -> Result<Vec<u8>, JsError> {
+    Ok(photo_labels(width, height, rgba, codes, colors)?
+        .labels()
+        .to_vec())
+}
+
+/// The colour rules from JS: undefined or null for the defaults, else an object of
+/// [`ColorThresholds`]' camelCase fields (checked; unknown fields refused).
+fn colors_of(colors: JsValue) -> Result<ColorThresholds, JsError> {
+    if colors.is_undefined() || colors.is_null() {
+        return Ok(ColorThresholds::default());
+    }
+    let t: ColorThresholds = serde_wasm_bindgen::from_value(colors)
+        .map_err(|e| JsError::new(&format!("tree colours: {e}")))?;
+    t.check().map_err(js)?;
+    Ok(t)
 }
 
 /// A photo's tree labels by colour, limited to its mask (`codes`; empty: the whole photo).
-fn photo_labels(width: u32, height: u32, rgba: &[u8], codes: &[u8]) -> Result<LabelImage, JsError> {
-    let labels =
-        labels_from_rgb(width, height, rgba, 4, &ColorThresholds::default()).map_err(js)?;
+fn photo_labels(
+    width: u32,
+    height: u32,
+    rgba: &[u8],
+    codes: &[u8],
+    colors: JsValue,
+) -> Result<LabelImage, JsError> {
+    let labels = labels_from_rgb(width, height, rgba, 4, &colors_of(colors)?).map_err(js)?;
     if codes.is_empty() {
         Ok(labels)
     } else {
@@ -118,8 +145,13 @@ impl TreeFitSession {
         codes: &[u8],
         seed: u32,
         budget: u32,
+        colors: JsValue,
     ) -> Result<TreeFitSession, JsError> {
-        TreeFitSession::start(&photo_labels(width, height, rgba, codes)?, seed, budget)
+        TreeFitSession::start(
+            &photo_labels(width, height, rgba, codes, colors)?,
+            seed,
+            budget,
+        )
     }
 
     /// Starts a fit to a label image (0 background, 1 branch, 2 leaf, 255 don't care).

@@ -61,6 +61,47 @@ test('the tree sample shows its branch and leaf labels over the photo', async ()
   assert.equal(await page.isHidden('#window-tools'), true);
 });
 
+test('the colours that sort leaves from branches can be adjusted', async () => {
+  const shares = async () => {
+    await page.waitForFunction(() => /What the tree fit sees/.test(document.getElementById('tree-state').textContent), null, { timeout: 30000 });
+    const text = await page.textContent('#tree-state');
+    const [, branch, leaf] = text.match(/branches in brown \((\d+) %\), leaves in green \((\d+) %\)/).map(Number);
+    return { branch, leaf, text };
+  };
+  const slide = (id, value) => page.evaluate(([id, value]) => {
+    const input = document.getElementById(id);
+    input.value = String(value);
+    input.dispatchEvent(new Event('input', { bubbles: true }));
+  }, [id, value]);
+  const start = await shares();
+  assert.equal(await page.isHidden('#tree-colors'), false);
+  await page.click('#tree-colors summary');
+  // Leaves only blue to purple: the oak's green leaves are not leaves any more.
+  await slide('leaf-hue-from', 200);
+  await slide('leaf-hue-to', 300);
+  await page.waitForFunction(() => /No leaves found/.test(document.getElementById('tree-state').textContent), null, { timeout: 30000 });
+  assert.equal((await shares()).leaf, 0);
+  assert.equal(await page.textContent('#leaf-hue-from-out'), '200°');
+  await page.locator('#tree-colors').screenshot({ path: join(ARTIFACTS, '11a-tree-colours.png') });
+  // Autumn leaves (a hue range through red to green) keep the green ones too.
+  await page.click('#colors-autumn');
+  await page.waitForFunction(() => !/No leaves found/.test(document.getElementById('tree-state').textContent) && /What the tree fit sees/.test(document.getElementById('tree-state').textContent), null, { timeout: 30000 });
+  assert.ok((await shares()).leaf >= 30, (await shares()).text);
+  // Everything else inside the mask as branches: more branch, never less.
+  await page.click('#colors-reset');
+  await page.waitForFunction((leaf) => new RegExp(`leaves in green \\(${leaf} %\\)`).test(document.getElementById('tree-state').textContent), start.leaf, { timeout: 30000 });
+  assert.deepEqual(await shares().then(({ branch, leaf }) => ({ branch, leaf })), { branch: start.branch, leaf: start.leaf });
+  await page.check('#rest-as-branch');
+  await page.waitForFunction(() => /What the tree fit sees/.test(document.getElementById('tree-state').textContent), null, { timeout: 30000 });
+  await page.waitForFunction(() => document.getElementById('rest-as-branch').checked);
+  const rest = await shares();
+  assert.ok(rest.branch >= start.branch, `${rest.branch} < ${start.branch}`);
+  await page.click('#colors-reset');
+  await page.waitForFunction((leaf) => new RegExp(`leaves in green \\(${leaf} %\\)`).test(document.getElementById('tree-state').textContent), start.leaf, { timeout: 30000 });
+  assert.equal(await page.isChecked('#rest-as-branch'), false);
+  await page.click('#tree-colors summary');
+});
+
 test('the tree fit runs with progress and puts its tree in the viewer', async () => {
   const stages = [];
   await page.exposeFunction('recordTreeStage', (s) => stages.push(s));
