@@ -154,6 +154,22 @@ test('a tree fit can be cancelled and keeps the best tree so far', async () => {
   await page.selectOption('#fit-quality', '1');
 });
 
+test('a photo keeps its colours across a reload', async () => {
+  await page.click('#tree-colors summary');
+  await page.click('#colors-autumn');
+  await page.waitForFunction(() => document.getElementById('leaf-hue-from-out').textContent === '330°');
+  // The session is saved shortly after a change (main.js persist()).
+  await page.waitForTimeout(1500);
+  await page.reload();
+  await page.waitForSelector('body[data-ready="true"]', { timeout: 90000 });
+  await page.waitForFunction(() => /What the tree fit sees/.test(document.getElementById('tree-state').textContent), null, { timeout: 60000 });
+  assert.equal(await page.textContent('#leaf-hue-from-out'), '330°');
+  assert.equal(await page.textContent('#leaf-min-value-out'), '0.45');
+  await page.click('#tree-colors summary');
+  await page.click('#colors-reset');
+  await page.waitForFunction(() => document.getElementById('leaf-hue-from-out').textContent === '60°');
+});
+
 test('no console errors, no page errors, no request outside the origin', () => {
   assert.deepEqual(log.pageErrors, []);
   assert.deepEqual(log.consoleErrors, []);
