@@ -40,7 +40,7 @@ export class FitRunner extends EventTarget {
    */
   async run({ generator, photos, quality, start = null }) {
     if (this.running) throw new Error('a fit is already running');
-    if (generator === 'tree') return this.runTree({ photo: photos[0], quality });
+    if (generator === 'tree') return this.runTree({ photo: photos[0], quality, start });
     // Window labels only mean something to a building fit (or Automatic, which may pick one).
     const useWindows = generator === 'building' || generator === 'auto';
     const masks = photos.map((p) => {
@@ -75,10 +75,10 @@ export class FitRunner extends EventTarget {
   }
 
   /**
-   * Fits the tree generator to `photo`'s colours inside its mask (trees fit one photo). Resolves
-   * like run().
+   * Fits the tree generator to `photo`'s colours inside its mask (trees fit one photo), from the
+   * tree `start` when given (its seed is kept). Resolves like run().
    */
-  async runTree({ photo, quality }) {
+  async runTree({ photo, quality, start = null }) {
     const { width, height } = photo.mask;
     const rgba = photoPixels(photo);
     const codes = fitCodes(photo).buffer;
@@ -99,7 +99,7 @@ export class FitRunner extends EventTarget {
     try {
       const out = await this.client.call(
         REQUESTS.TREE_RUN,
-        { fitId, seed: 1, quality, width, height, rgba, codes },
+        { fitId, seed: 1, quality, width, height, rgba, codes, ...(start ? { start } : {}) },
         {
           transfer: [rgba, codes],
           onEvent: (event, data) => {

@@ -692,9 +692,17 @@ function updateFitButton() {
   button.disabled = !ready || !!fitter.running || !state.editor;
   button.title = ready ? '' : 'Add a photo and wait for its mask first';
   const refit = $('refit');
-  const fittable = !!state.editor?.spec?.differentiable;
+  // Trees are not differentiable but have their own fit, which can start from a tree too.
+  const tree = state.editor?.spec?.name === 'tree';
+  const fittable = !!state.editor?.spec?.differentiable || tree;
   refit.disabled = button.disabled || !fittable;
-  refit.title = !ready ? button.title : fittable ? 'Fit again, starting from the values above' : 'This generator cannot be fitted in this build';
+  refit.title = !ready
+    ? button.title
+    : !fittable
+      ? 'This generator cannot be fitted in this build'
+      : tree
+        ? 'Fit again, starting from the tree above (its seed, so its branches, stay)'
+        : 'Fit again, starting from the values above';
 }
 
 $('fit-start').addEventListener('click', () => {
@@ -709,12 +717,19 @@ $('fit-start').addEventListener('click', () => {
 });
 
 // "Refit from here": the edited model (say, a handle fixed by hand) joins the fit's starting
-// population, so the fit polishes it against the photos instead of starting over.
+// population, so the fit polishes it against the photos instead of starting over. A tree's fit
+// keeps the tree's seed and never returns a tree less like the photo than the edited one.
 $('refit').addEventListener('click', () => {
   const editor = state.editor;
   if (!editor?.spec) return;
   runFit({ generator: editor.spec.name, start: editor.params.slice() });
 });
+
+/** A tree refit's similarity to the photo, before → after (its result says both); else ''. */
+function similarityChange(r) {
+  if (typeof r.start_similarity !== 'number' || typeof r.similarity !== 'number') return '';
+  return `, similarity to the photo ${r.start_similarity.toFixed(3)} → ${r.similarity.toFixed(3)}`;
+}
 
 /** Runs a fit and hands its model to the editor; `start`: parameters to start from. */
 async function runFit({ generator, start = null }) {
@@ -727,6 +742,9 @@ async function runFit({ generator, start = null }) {
   try {
     const out = await fitter.run({ generator, photos: state.photos.slice(), quality: Number($('fit-quality').value), start });
     const r = out.result;
+    // A refit that found nothing better gives back the very values it started from: say so,
+    // rather than let "Fitted" suggest the model changed.
+    const kept = start && r.generator === generator && r.params.length === start.length && r.params.every((v, i) => v === start[i]);
     // A building's windows are glass from HIGH detail up (MEDIUM shows them as recessed
     // bands), so a fitted building opens at HIGH at least: the windows the photo shows.
     const lod = r.generator === 'building' ? Math.max(state.editor.lod, 2) : state.editor.lod;
@@ -735,7 +753,9 @@ async function runFit({ generator, start = null }) {
       fitMessage,
       out.cancelled
         ? `Stopped after ${out.seconds.toFixed(1)} s; the best model so far is below.`
-        : `Fitted in ${out.seconds.toFixed(1)} s (${r.evaluations.toLocaleString('en')} evaluations). Edit the model below; Reset returns to the fitted values.`,
+        : kept
+          ? `Refitted in ${out.seconds.toFixed(1)} s (${r.evaluations.toLocaleString('en')} evaluations): nothing closer to the photos than your model was found, so it is kept.`
+          : `Fitted in ${out.seconds.toFixed(1)} s (${r.evaluations.toLocaleString('en')} evaluations)${similarityChange(r)}. Edit the model below; Reset returns to the fitted values.`,
       'info',
     );
     outcome = out.cancelled ? 'cancelled' : 'done';

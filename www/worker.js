@@ -193,9 +193,18 @@ async function stepFit(fitId, session, emit, preview) {
 const TREE_EVALUATIONS = 4700;
 
 /** A tree fit, stepped in slices like runFit. */
-async function runTreeFit({ fitId, seed = 1, quality = 1, width, height, rgba, codes }, emit) {
+async function runTreeFit({ fitId, seed = 1, quality = 1, width, height, rgba, codes, start = [] }, emit) {
   const budget = quality === 1 ? 0 : Math.max(200, Math.round(TREE_EVALUATIONS * quality));
-  const session = new wasm.TreeFitSession(width, height, new Uint8Array(rgba), new Uint8Array(codes ?? 0), seed, budget);
+  const session = new wasm.TreeFitSession(
+    width,
+    height,
+    new Uint8Array(rgba),
+    new Uint8Array(codes ?? 0),
+    seed,
+    budget,
+    // Empty: from scratch; else the tree to refit from ("Refit from here").
+    Float64Array.from(start ?? []),
+  );
   return stepFit(fitId, session, emit, () => {
     // A preview comes only with the step that changed the best tree: always pass it on.
     const w = session.previewWidth();
