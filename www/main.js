@@ -9,7 +9,7 @@ import * as store from './store.js';
 import { CameraCapture } from './camera.js';
 import { Viewer } from './viewer.js';
 import { Editor, LODS } from './editor.js';
-import { MaskEditor, autoMask, reviveMask, detectWindows, treeLabels, WINDOW } from './masking.js';
+import { MaskEditor, autoMask, reviveMask, detectWindows, windowsAfterMask, treeLabels, WINDOW } from './masking.js';
 import { FitRunner } from './fitting.js';
 
 const $ = (id) => document.getElementById(id);
@@ -193,6 +193,8 @@ async function findMask(photo) {
   renderMaskState();
   try {
     await autoMask(client, photo);
+    // A new mask: windows found automatically are found again, painted ones clipped to it.
+    await windowsAfterMask(client, photo);
     photo.maskState = 'ready';
   } catch (err) {
     photo.maskState = 'failed';
@@ -207,7 +209,10 @@ async function findMask(photo) {
   persist();
 }
 
-/** The windows tools: shown for buildings, with how much of the building is marked as window. */
+/**
+ * The windows tools: shown for buildings, with how much of the building is marked as window and
+ * what the last mask correction did to the windows (found again, or painted ones clipped).
+ */
 function renderWindowTools() {
   const photo = state.photos.find((p) => p.id === state.selected);
   const building = fitGenerator() === 'building';
@@ -223,8 +228,9 @@ function renderWindowTools() {
   }
   const codes = photo?.windows?.codes;
   $('windows-clear').disabled = !codes;
+  const note = photo?.windowsNote ? ` ${photo.windowsNote}` : '';
   if (!codes) {
-    $('windows-state').textContent = 'No windows marked yet.';
+    $('windows-state').textContent = `No windows marked yet.${note}`;
     return;
   }
   let win = 0;
@@ -233,9 +239,11 @@ function renderWindowTools() {
     if (c === WINDOW) win += 1;
     if (c === 1 || c === WINDOW) inside += 1;
   }
-  $('windows-state').textContent = win
-    ? `Windows marked in teal: ${Math.round((100 * win) / Math.max(1, inside))} % of the building.`
-    : 'No windows found: paint a few with the windows brush.';
+  $('windows-state').textContent = `${
+    win
+      ? `Windows marked in teal: ${Math.round((100 * win) / Math.max(1, inside))} % of the building.`
+      : 'No windows found: paint a few with the windows brush.'
+  }${note}`;
 }
 
 /**
@@ -444,6 +452,7 @@ $('windows-clear').addEventListener('click', () => {
   const photo = state.photos.find((p) => p.id === state.selected);
   if (!photo) return;
   photo.windows = null;
+  photo.windowsNote = '';
   maskEditor.draw();
   renderWindowTools();
   persist();

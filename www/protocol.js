@@ -40,6 +40,10 @@ export const REQUESTS = Object.freeze({
   // { key, strokes: [{ window: bool, points: [x, y, …], radius }] } → labels (from the user's
   // window and wall strokes; at least one window stroke).
   MASK_WINDOWS_STROKES: 'mask/windowsStrokes',
+  // { key, codes: ArrayBuffer } (labels as above, made for an earlier mask) → labels fitted to
+  // the current mask: windows outside the object dropped, the rest kept (painted windows after
+  // a mask correction; automatic ones are found again with MASK_WINDOWS_AUTO instead).
+  MASK_WINDOWS_CLIP: 'mask/windowsClip',
   // { bytes: ArrayBuffer } (the original photo file) → { focal_35mm: number | null }: the
   // EXIF 35 mm-equivalent focal length, read before the page's downscaling drops the EXIF.
   PHOTO_FOCAL: 'photo/focal',

@@ -65,6 +65,10 @@ const handlers = {
     );
     return windowsOut(session, labels);
   },
+  [REQUESTS.MASK_WINDOWS_CLIP]: ({ key, codes }) => {
+    const session = maskSession(key);
+    return windowsOut(session, session.clipWindows(new Uint8Array(codes)));
+  },
   [REQUESTS.PHOTO_FOCAL]: ({ bytes }) => {
     const f = wasm.focal35mmFromFile(new Uint8Array(bytes));
     return { focal_35mm: f > 0 ? f : null };
