@@ -764,7 +764,7 @@ async function runFit({ generator, start = null }) {
         ? `Stopped after ${out.seconds.toFixed(1)} s; the best model so far is below.`
         : kept
           ? `Refitted in ${out.seconds.toFixed(1)} s (${r.evaluations.toLocaleString('en')} evaluations): nothing closer to the photos than your model was found, so it is kept.`
-          : `Fitted in ${out.seconds.toFixed(1)} s (${r.evaluations.toLocaleString('en')} evaluations)${similarityChange(r)}. Edit the model below; Reset returns to the fitted values.`,
+          : `${start ? 'Refitted' : 'Fitted'} in ${out.seconds.toFixed(1)} s (${r.evaluations.toLocaleString('en')} evaluations)${similarityChange(r)}. Edit the model below; Reset returns to the fitted values.`,
       'info',
     );
     outcome = out.cancelled ? 'cancelled' : 'done';
