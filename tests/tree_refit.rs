@@ -141,7 +141,7 @@ fn refit_from_another_tree_is_never_worse_and_keeps_its_seed() {
 fn refit_refuses_a_start_that_is_not_a_tree() {
     let reference = render(&truth());
     let view = tree_view(SIZE, SIZE, 12.0).expect("view");
-    let short = vec![1.0; 3];
+    let short = [1.0; 3];
     let mut nan = truth();
     nan[idx::HEIGHT] = f64::NAN;
     for bad in [&short[..], &nan[..]] {
