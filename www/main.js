@@ -753,7 +753,12 @@ async function runFit({ generator, start = null }) {
     const r = out.result;
     // A refit that found nothing better gives back the very values it started from: say so,
     // rather than let "Fitted" suggest the model changed.
-    const kept = start && r.generator === generator && r.params.length === start.length && r.params.every((v, i) => v === start[i]);
+    // (Up to rounding: a tree's values go through the fit's [0, 1] genes and back.)
+    const kept =
+      start &&
+      r.generator === generator &&
+      r.params.length === start.length &&
+      r.params.every((v, i) => Math.abs(v - start[i]) <= 1e-9 * Math.max(1, Math.abs(start[i])));
     // A building's windows are glass from HIGH detail up (MEDIUM shows them as recessed
     // bands), so a fitted building opens at HIGH at least: the windows the photo shows.
     const lod = r.generator === 'building' ? Math.max(state.editor.lod, 2) : state.editor.lod;
