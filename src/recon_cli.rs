@@ -297,7 +297,7 @@ fn reconstruct_tree(a: &ReconstructArgs) -> Result<(), String> {
     let procfit::tree::impostor::PhotoTreeFit {
         mut session,
         framing,
-    } = procfit::tree::impostor::start_photo_fit(&labels, a.seed, a.budget)
+    } = procfit::tree::impostor::start_photo_fit(&labels, a.seed, a.budget, None)
         .map_err(|e| format!("{}: {e}", image.display()))?;
     let start = Instant::now();
     let mut last_draw = -1.0f64;

@@ -7,7 +7,9 @@ use image::codecs::png::PngEncoder;
 use image::metadata::Orientation;
 use image::{DynamicImage, ExtendedColorType, ImageEncoder, RgbImage, RgbaImage};
 use procfit::mask::Mask;
-use procfit::segment::windows::{LABEL_WINDOW, detect_windows, windows_from_strokes};
+use procfit::segment::windows::{
+    LABEL_BACKGROUND, LABEL_WINDOW, clip_windows, detect_windows, windows_from_strokes,
+};
 use procfit::segment::{
     BBox, Label, Options, Photo, Segmentation, Session, Stroke, WORKING_SIDE, segment,
     segment_alpha, segment_auto, segment_mask_image,
@@ -771,6 +773,65 @@ fn windows_detected_and_painted() {
     let score = iou(&got, &win_truth);
     eprintln!("windows: painted IoU {score:.4}");
     assert!(score >= 0.95, "painted windows: IoU {score}");
+}
+
+#[test]
+fn painted_windows_are_clipped_to_a_corrected_mask() {
+    let (scene, _) = facade();
+    let (img, _) = render(&scene, 4);
+    let photo = Photo::decode(&jpeg(&img, 85), WORKING_SIDE).unwrap();
+    let whole = segment_auto(&photo).unwrap();
+    let before = detect_windows(&photo, &whole).unwrap();
+    let windows =
+        |l: &procfit::mask::LabelImage| l.labels().iter().filter(|&&v| v == LABEL_WINDOW).count();
+    // The mask corrected to a box around the left two window columns only.
+    let s = photo.height() as f32 / scene.h as f32;
+    let rect = BBox {
+        x0: (80.0 * s) as u32,
+        y0: (25.0 * s) as u32,
+        x1: (205.0 * s) as u32,
+        y1: (262.0 * s) as u32,
+    };
+    let session = Session::with_rect(&photo, rect, &Options::default()).unwrap();
+    let seg = session.segmentation();
+    let after = clip_windows(seg, &before).unwrap();
+    let obj: Vec<bool> = seg.object.values().iter().map(|&v| v >= 0.5).collect();
+    let (mut outside, mut kept, mut lost) = (0, 0, 0);
+    for (i, (&b, &a)) in before.labels().iter().zip(after.labels()).enumerate() {
+        let band = seg.mask.values()[i] == Mask::DONT_CARE;
+        if a == LABEL_WINDOW && !obj[i] {
+            outside += 1;
+        }
+        if b == LABEL_WINDOW && obj[i] && !band {
+            if a == LABEL_WINDOW {
+                kept += 1
+            } else {
+                lost += 1
+            }
+        }
+        // Outside the new object nothing but background (or the outline band) is left.
+        assert!(
+            obj[i] || band || a == LABEL_BACKGROUND,
+            "pixel {i}: label {a} outside the object"
+        );
+    }
+    eprintln!(
+        "windows: {} before, {} after the box, {kept} kept",
+        windows(&before),
+        windows(&after)
+    );
+    assert_eq!(outside, 0, "window pixels outside the corrected mask");
+    assert_eq!(lost, 0, "windows inside the corrected mask were dropped");
+    // The right window column is gone, the two left ones stay.
+    assert!(
+        kept > 0 && windows(&after) < windows(&before) * 3 / 4,
+        "{} of {}",
+        windows(&after),
+        windows(&before)
+    );
+    // Labels for another mask size are refused.
+    let small = procfit::mask::LabelImage::new(4, 4, vec![LABEL_WINDOW; 16]).unwrap();
+    assert!(clip_windows(seg, &small).is_err());
 }
 
 // ---------------------------------------------------------------- bad input

@@ -19,6 +19,12 @@ export const TREE_STAGES = {
   3: 'Stage 3 of 3: polishing the best tree',
 };
 
+/** A tree refit's stages: it keeps the start tree's seed, so it tries no others. */
+export const TREE_REFIT_STAGES = {
+  ...TREE_STAGES,
+  2: "Stage 2 of 3: keeping your tree's seed (no other seeds tried)",
+};
+
 /** Preview colours of tree labels: branch brown, leaf green. */
 const TREE_TINT = { 1: [120, 78, 40, 255], 2: [60, 150, 60, 255] };
 
@@ -40,7 +46,7 @@ export class FitRunner extends EventTarget {
    */
   async run({ generator, photos, quality, start = null }) {
     if (this.running) throw new Error('a fit is already running');
-    if (generator === 'tree') return this.runTree({ photo: photos[0], quality });
+    if (generator === 'tree') return this.runTree({ photo: photos[0], quality, start });
     // Window labels only mean something to a building fit (or Automatic, which may pick one).
     const useWindows = generator === 'building' || generator === 'auto';
     const masks = photos.map((p) => {
@@ -75,10 +81,10 @@ export class FitRunner extends EventTarget {
   }
 
   /**
-   * Fits the tree generator to `photo`'s colours inside its mask (trees fit one photo). Resolves
-   * like run().
+   * Fits the tree generator to `photo`'s colours inside its mask (trees fit one photo), from the
+   * tree `start` when given (its seed is kept). Resolves like run().
    */
-  async runTree({ photo, quality }) {
+  async runTree({ photo, quality, start = null }) {
     const { width, height } = photo.mask;
     const rgba = photoPixels(photo);
     const codes = fitCodes(photo).buffer;
@@ -87,7 +93,7 @@ export class FitRunner extends EventTarget {
     this.running = { fitId };
     this.curves = { 1: [], 2: [], 3: [] };
     this.photo = photo;
-    this.tree = true;
+    this.tree = start ? TREE_REFIT_STAGES : TREE_STAGES;
     this.lastTree = null;
     this.els.box.hidden = false;
     this.els.bar.value = 0;
@@ -99,7 +105,7 @@ export class FitRunner extends EventTarget {
     try {
       const out = await this.client.call(
         REQUESTS.TREE_RUN,
-        { fitId, seed: 1, quality, width, height, rgba, codes, colors: treeColors(photo) },
+        { fitId, seed: 1, quality, width, height, rgba, codes, colors: treeColors(photo), ...(start ? { start } : {}) },
         {
           transfer: [rgba, codes],
           onEvent: (event, data) => {
@@ -126,7 +132,8 @@ export class FitRunner extends EventTarget {
   progress(p, t0) {
     const frac = p.work_total > 0 ? Math.min(1, p.work_done / p.work_total) : 0;
     this.els.bar.value = frac;
-    const names = this.tree ? TREE_STAGES : STAGES;
+    // `this.tree`: the tree fit's stage names (a refit's differ), or false.
+    const names = this.tree || STAGES;
     // A fit makes a few runs from different seeds side by side and keeps the best: say so.
     // The stage and curve are the first unfinished run's; when it changes, its curves start
     // afresh (the outline shown is the best finished run's once there is one).

@@ -9,7 +9,7 @@ import * as store from './store.js';
 import { CameraCapture } from './camera.js';
 import { Viewer } from './viewer.js';
 import { Editor, LODS } from './editor.js';
-import { MaskEditor, autoMask, reviveMask, detectWindows, treeLabels, treeColors, TREE_COLORS, AUTUMN_COLORS, WINDOW } from './masking.js';
+import { MaskEditor, autoMask, reviveMask, detectWindows, windowsAfterMask, treeLabels, treeColors, TREE_COLORS, AUTUMN_COLORS, WINDOW } from './masking.js';
 import { FitRunner } from './fitting.js';
 
 const $ = (id) => document.getElementById(id);
@@ -193,6 +193,8 @@ async function findMask(photo) {
   renderMaskState();
   try {
     await autoMask(client, photo);
+    // A new mask: windows found automatically are found again, painted ones clipped to it.
+    await windowsAfterMask(client, photo);
     photo.maskState = 'ready';
   } catch (err) {
     photo.maskState = 'failed';
@@ -207,7 +209,10 @@ async function findMask(photo) {
   persist();
 }
 
-/** The windows tools: shown for buildings, with how much of the building is marked as window. */
+/**
+ * The windows tools: shown for buildings, with how much of the building is marked as window and
+ * what the last mask correction did to the windows (found again, or painted ones clipped).
+ */
 function renderWindowTools() {
   const photo = state.photos.find((p) => p.id === state.selected);
   const building = fitGenerator() === 'building';
@@ -223,8 +228,9 @@ function renderWindowTools() {
   }
   const codes = photo?.windows?.codes;
   $('windows-clear').disabled = !codes;
+  const note = photo?.windowsNote ? ` ${photo.windowsNote}` : '';
   if (!codes) {
-    $('windows-state').textContent = 'No windows marked yet.';
+    $('windows-state').textContent = `No windows marked yet.${note}`;
     return;
   }
   let win = 0;
@@ -233,9 +239,11 @@ function renderWindowTools() {
     if (c === WINDOW) win += 1;
     if (c === 1 || c === WINDOW) inside += 1;
   }
-  $('windows-state').textContent = win
-    ? `Windows marked in teal: ${Math.round((100 * win) / Math.max(1, inside))} % of the building.`
-    : 'No windows found: paint a few with the windows brush.';
+  $('windows-state').textContent = `${
+    win
+      ? `Windows marked in teal: ${Math.round((100 * win) / Math.max(1, inside))} % of the building.`
+      : 'No windows found: paint a few with the windows brush.'
+  }${note}`;
 }
 
 /**
@@ -497,6 +505,7 @@ $('windows-clear').addEventListener('click', () => {
   const photo = state.photos.find((p) => p.id === state.selected);
   if (!photo) return;
   photo.windows = null;
+  photo.windowsNote = '';
   maskEditor.draw();
   renderWindowTools();
   persist();
@@ -745,9 +754,17 @@ function updateFitButton() {
   button.disabled = !ready || !!fitter.running || !state.editor;
   button.title = ready ? '' : 'Add a photo and wait for its mask first';
   const refit = $('refit');
-  const fittable = !!state.editor?.spec?.differentiable;
+  // Trees are not differentiable but have their own fit, which can start from a tree too.
+  const tree = state.editor?.spec?.name === 'tree';
+  const fittable = !!state.editor?.spec?.differentiable || tree;
   refit.disabled = button.disabled || !fittable;
-  refit.title = !ready ? button.title : fittable ? 'Fit again, starting from the values above' : 'This generator cannot be fitted in this build';
+  refit.title = !ready
+    ? button.title
+    : !fittable
+      ? 'This generator cannot be fitted in this build'
+      : tree
+        ? 'Fit again, starting from the tree above (its seed, so its branches, stay)'
+        : 'Fit again, starting from the values above';
 }
 
 $('fit-start').addEventListener('click', () => {
@@ -762,12 +779,19 @@ $('fit-start').addEventListener('click', () => {
 });
 
 // "Refit from here": the edited model (say, a handle fixed by hand) joins the fit's starting
-// population, so the fit polishes it against the photos instead of starting over.
+// population, so the fit polishes it against the photos instead of starting over. A tree's fit
+// keeps the tree's seed and never returns a tree less like the photo than the edited one.
 $('refit').addEventListener('click', () => {
   const editor = state.editor;
   if (!editor?.spec) return;
   runFit({ generator: editor.spec.name, start: editor.params.slice() });
 });
+
+/** A tree refit's similarity to the photo, before → after (its result says both); else ''. */
+function similarityChange(r) {
+  if (typeof r.start_similarity !== 'number' || typeof r.similarity !== 'number') return '';
+  return `, similarity to the photo ${r.start_similarity.toFixed(3)} → ${r.similarity.toFixed(3)}`;
+}
 
 /** Runs a fit and hands its model to the editor; `start`: parameters to start from. */
 async function runFit({ generator, start = null }) {
@@ -780,6 +804,14 @@ async function runFit({ generator, start = null }) {
   try {
     const out = await fitter.run({ generator, photos: state.photos.slice(), quality: Number($('fit-quality').value), start });
     const r = out.result;
+    // A refit that found nothing better gives back the very values it started from: say so,
+    // rather than let "Fitted" suggest the model changed.
+    // (Up to rounding: a tree's values go through the fit's [0, 1] genes and back.)
+    const kept =
+      start &&
+      r.generator === generator &&
+      r.params.length === start.length &&
+      r.params.every((v, i) => Math.abs(v - start[i]) <= 1e-9 * Math.max(1, Math.abs(start[i])));
     // A building's windows are glass from HIGH detail up (MEDIUM shows them as recessed
     // bands), so a fitted building opens at HIGH at least: the windows the photo shows.
     const lod = r.generator === 'building' ? Math.max(state.editor.lod, 2) : state.editor.lod;
@@ -788,7 +820,9 @@ async function runFit({ generator, start = null }) {
       fitMessage,
       out.cancelled
         ? `Stopped after ${out.seconds.toFixed(1)} s; the best model so far is below.`
-        : `Fitted in ${out.seconds.toFixed(1)} s (${r.evaluations.toLocaleString('en')} evaluations). Edit the model below; Reset returns to the fitted values.`,
+        : kept
+          ? `Refitted in ${out.seconds.toFixed(1)} s (${r.evaluations.toLocaleString('en')} evaluations): nothing closer to the photos than your model was found, so it is kept.`
+          : `${start ? 'Refitted' : 'Fitted'} in ${out.seconds.toFixed(1)} s (${r.evaluations.toLocaleString('en')} evaluations)${similarityChange(r)}. Edit the model below; Reset returns to the fitted values.`,
       'info',
     );
     outcome = out.cancelled ? 'cancelled' : 'done';

@@ -8,6 +8,11 @@
 // Corrections are kept with the photo (`photo.edits`: the box and strokes since the last
 // automatic mask) so that a worker session made again — after a reload or a worker restart —
 // can replay them; the next correction then builds on all earlier ones.
+//
+// Window labels follow the mask: after each correction, windows found automatically are found
+// again in the new mask (with the wall-brush erasures made on them applied again), and windows
+// painted by hand are kept but clipped to it (`windowsAfterMask`); `photo.windowsNote` says
+// which happened, for the windows line.
 import { REQUESTS } from './protocol.js';
 
 /** Overlay colours (RGBA) by mask code: background dimmed, object tinted, unsure in amber. */
@@ -105,11 +110,61 @@ export function fitWindows(photo) {
   return out;
 }
 
-/** Finds windows automatically inside `photo`'s mask; stores and returns them. */
+/**
+ * Finds windows automatically inside `photo`'s mask; stores and returns them. `photo.windows`
+ * is { codes, strokes, erased }: `strokes` the windows / wall brush strokes the labels came
+ * from (empty when found automatically), `erased` the wall-brush strokes that took windows out
+ * of automatic ones (applied again when they are found again).
+ */
 export async function detectWindows(client, photo) {
   const w = await client.call(REQUESTS.MASK_WINDOWS_AUTO, { key: String(photo.id) });
-  photo.windows = { codes: new Uint8Array(w.codes), strokes: [] };
+  photo.windows = { codes: new Uint8Array(w.codes), strokes: [], erased: [] };
+  photo.windowsNote = '';
   return photo.windows;
+}
+
+/** Whether `photo`'s windows were painted by hand (windows brush), not found automatically. */
+export function paintedWindows(photo) {
+  return !!photo.windows?.strokes?.some((s) => s.window);
+}
+
+/** Turns the window pixels under a wall-brush `stroke` ({ points: [x, y, …], radius }) into façade. */
+function eraseWindows(codes, width, height, stroke) {
+  const pts = [];
+  for (let i = 0; i + 1 < stroke.points.length; i += 2) pts.push([stroke.points[i], stroke.points[i + 1]]);
+  const paint = strokePixels(width, height, pts, stroke.radius);
+  for (let i = 0; i < codes.length; i += 1) if (paint[4 * i + 3] > 0 && codes[i] === WINDOW) codes[i] = 1;
+}
+
+/**
+ * Makes `photo`'s window labels fit its mask again after the mask changed: windows found
+ * automatically are found again (and the wall-brush erasures made on them applied again);
+ * painted ones are kept, clipped to the new object. Sets `photo.windowsNote` to say so; when
+ * that fails, the windows are cleared and the note says why. Does nothing without windows.
+ */
+export async function windowsAfterMask(client, photo) {
+  const w = photo.windows;
+  if (!w?.codes || !photo.mask) return;
+  const key = String(photo.id);
+  const { width, height } = photo.mask;
+  try {
+    if (paintedWindows(photo)) {
+      const codes = w.codes.slice();
+      const out = await client.call(REQUESTS.MASK_WINDOWS_CLIP, { key, codes: codes.buffer }, { transfer: [codes.buffer] });
+      photo.windows = { ...w, codes: new Uint8Array(out.codes) };
+      photo.windowsNote = 'Your painted windows are kept, cut to the corrected mask.';
+    } else {
+      const out = await client.call(REQUESTS.MASK_WINDOWS_AUTO, { key });
+      const codes = new Uint8Array(out.codes);
+      const erased = w.erased ?? [];
+      for (const s of erased) eraseWindows(codes, width, height, s);
+      photo.windows = { codes, strokes: [], erased };
+      photo.windowsNote = 'Windows found again in the corrected mask.';
+    }
+  } catch (err) {
+    photo.windows = null;
+    photo.windowsNote = `The windows were cleared with the mask correction: ${err.message}.`;
+  }
 }
 
 function setMask(photo, m) {
@@ -243,16 +298,19 @@ export class MaskEditor {
             this.onError('Paint over a window first (windows brush), or find windows automatically.');
             return;
           }
-          // Windows found automatically: the wall brush erases them where it paints.
+          // Windows found automatically: the wall brush erases them where it paints (and
+          // again when they are found again after a mask correction).
           const codes = photo.windows.codes.slice();
-          const paint = strokePixels(photo.mask.width, photo.mask.height, drag.points, this.radius());
-          for (let i = 0; i < codes.length; i += 1) if (paint[4 * i + 3] > 0 && codes[i] === WINDOW) codes[i] = 1;
-          photo.windows = { codes, strokes: [] };
+          const erase = { points: stroke.points, radius: stroke.radius };
+          eraseWindows(codes, photo.mask.width, photo.mask.height, erase);
+          photo.windows = { codes, strokes: [], erased: [...(photo.windows.erased ?? []), erase] };
+          photo.windowsNote = '';
           this.onChange(photo);
           return;
         }
         const w = await this.client.call(REQUESTS.MASK_WINDOWS_STROKES, { key: String(photo.id), strokes });
-        photo.windows = { codes: new Uint8Array(w.codes), strokes };
+        photo.windows = { codes: new Uint8Array(w.codes), strokes, erased: [] };
+        photo.windowsNote = '';
         this.onChange(photo);
         return;
       }
@@ -276,6 +334,8 @@ export class MaskEditor {
       setMask(photo, m);
       // A box starts the worker's session over; a stroke adds to it.
       photo.edits = edit.rect ? [edit] : [...(photo.edits ?? []), edit];
+      // Still busy: the windows follow the new mask before the next correction can start.
+      await windowsAfterMask(this.client, photo);
       this.onChange(photo);
     } catch (err) {
       this.onError(`The correction did not work: ${err.message}`);

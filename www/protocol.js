@@ -40,6 +40,10 @@ export const REQUESTS = Object.freeze({
   // { key, strokes: [{ window: bool, points: [x, y, …], radius }] } → labels (from the user's
   // window and wall strokes; at least one window stroke).
   MASK_WINDOWS_STROKES: 'mask/windowsStrokes',
+  // { key, codes: ArrayBuffer } (labels as above, made for an earlier mask) → labels fitted to
+  // the current mask: windows outside the object dropped, the rest kept (painted windows after
+  // a mask correction; automatic ones are found again with MASK_WINDOWS_AUTO instead).
+  MASK_WINDOWS_CLIP: 'mask/windowsClip',
   // { bytes: ArrayBuffer } (the original photo file) → { focal_35mm: number | null }: the
   // EXIF 35 mm-equivalent focal length, read before the page's downscaling drops the EXIF.
   PHOTO_FOCAL: 'photo/focal',
@@ -59,12 +63,16 @@ export const REQUESTS = Object.freeze({
   // { width, height, rgba, codes } → { width, height, labels: ArrayBuffer } (0 background,
   // 1 branch, 2 leaf, 255 don't care), for the preview over the photo.
   TREE_LABELS: 'tree/labels',
-  // { fitId, seed, quality, width, height, rgba, codes } → { cancelled, result: { generator:
-  // 'tree', params, lod, seed, similarity, evaluations, cameras } }. On the way: event 'progress'
+  // { fitId, seed, quality, width, height, rgba, codes, start?: number[] } → { cancelled,
+  // result: { generator: 'tree', params, lod, seed, similarity, start_similarity, evaluations,
+  // cameras } } (`start_similarity`: the start's, undefined without one).
+  // `start`: the tree generator's parameters to refit from ("Refit from here"): the fit keeps
+  // its `seed` parameter and never returns a tree less similar to the photo. On the way: event
+  // 'progress'
   // { stage (1 GA, 2 seed trials, 3 local search), generation, evaluations, total_evaluations,
   // best_similarity, params, done, preview: { width, height, labels: ArrayBuffer } | null } (the
   // best tree's labels in the fit's square frame). Cancelled by FIT_CANCEL.
   TREE_RUN: 'tree/run',
 });
 
-export const PROTOCOL_VERSION = 6;
+export const PROTOCOL_VERSION = 7;

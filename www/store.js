@@ -64,8 +64,9 @@ export async function photoRecord(p) {
     mask: null,
     // Corrections since the automatic mask, replayed into the worker's session on restore.
     edits: p.edits ?? [],
-    // Window labels (buildings) and the strokes they came from.
-    windows: p.windows ? { codes: p.windows.codes, strokes: p.windows.strokes ?? [] } : null,
+    // Window labels (buildings), the strokes they came from and the wall strokes that erased
+    // windows found automatically (applied again when a mask correction finds them again).
+    windows: p.windows ? { codes: p.windows.codes, strokes: p.windows.strokes ?? [], erased: p.windows.erased ?? [] } : null,
     // Trees: the photo's colour rules for leaves and branches, when the user changed them.
     treeColors: p.treeColors ?? null,
   };
@@ -88,7 +89,9 @@ export async function photoFromRecord(rec) {
     blob: rec.blob,
     focal35mm: rec.focal35mm ?? null,
     edits: Array.isArray(rec.edits) ? rec.edits : [],
-    windows: rec.windows?.codes ? { codes: new Uint8Array(rec.windows.codes), strokes: rec.windows.strokes ?? [] } : null,
+    windows: rec.windows?.codes
+      ? { codes: new Uint8Array(rec.windows.codes), strokes: rec.windows.strokes ?? [], erased: Array.isArray(rec.windows.erased) ? rec.windows.erased : [] }
+      : null,
     treeColors: rec.treeColors && typeof rec.treeColors === 'object' ? rec.treeColors : null,
   };
   if (rec.mask) {

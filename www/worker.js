@@ -65,6 +65,10 @@ const handlers = {
     );
     return windowsOut(session, labels);
   },
+  [REQUESTS.MASK_WINDOWS_CLIP]: ({ key, codes }) => {
+    const session = maskSession(key);
+    return windowsOut(session, session.clipWindows(new Uint8Array(codes)));
+  },
   [REQUESTS.PHOTO_FOCAL]: ({ bytes }) => {
     const f = wasm.focal35mmFromFile(new Uint8Array(bytes));
     return { focal_35mm: f > 0 ? f : null };
@@ -193,9 +197,19 @@ async function stepFit(fitId, session, emit, preview) {
 const TREE_EVALUATIONS = 4700;
 
 /** A tree fit, stepped in slices like runFit. */
-async function runTreeFit({ fitId, seed = 1, quality = 1, width, height, rgba, codes, colors }, emit) {
+async function runTreeFit({ fitId, seed = 1, quality = 1, width, height, rgba, codes, start = [], colors }, emit) {
   const budget = quality === 1 ? 0 : Math.max(200, Math.round(TREE_EVALUATIONS * quality));
-  const session = new wasm.TreeFitSession(width, height, new Uint8Array(rgba), new Uint8Array(codes ?? 0), seed, budget, colors ?? undefined);
+  const session = new wasm.TreeFitSession(
+    width,
+    height,
+    new Uint8Array(rgba),
+    new Uint8Array(codes ?? 0),
+    seed,
+    budget,
+    // Empty: from scratch; else the tree to refit from ("Refit from here").
+    Float64Array.from(start ?? []),
+    colors ?? undefined,
+  );
   return stepFit(fitId, session, emit, () => {
     // A preview comes only with the step that changed the best tree: always pass it on.
     const w = session.previewWidth();

@@ -13,6 +13,10 @@
 //! - [`windows_from_strokes`]: the user paints some windows ([`Label::Object`]) and optionally
 //!   some wall ([`Label::Background`]); colour models from the strokes and a graph cut inside
 //!   the object label the rest. Works whenever windows and wall differ in colour.
+//!
+//! When the mask is corrected afterwards, windows found automatically are simply found again;
+//! windows the user painted are kept as they are and [`clip_windows`] fits them to the new
+//! object (none outside it, façade where the object grew).
 
 use super::gmm::{Gmm, Rgb};
 use super::grabcut::{HARD, cut_grid, for_stroke_pixels, nlinks_of};
@@ -119,6 +123,31 @@ pub fn detect_windows(photo: &Photo, seg: &Segmentation) -> Result<LabelImage, S
             }
         }
     }
+    labels(seg, &obj, &win)
+}
+
+/// Window labels made for an earlier mask, fitted to the segmentation's current one: window
+/// pixels stay windows where they are still inside the object and are dropped outside it;
+/// every other object pixel is façade, the outline band don't care, the rest background —
+/// as [`detect_windows`] labels. Errors on labels of another size or an empty object.
+pub fn clip_windows(seg: &Segmentation, previous: &LabelImage) -> Result<LabelImage, SegmentError> {
+    let (w, h) = (seg.object.width(), seg.object.height());
+    if (previous.width(), previous.height()) != (w, h) {
+        return Err(SegmentError(format!(
+            "the window labels are {}×{} but the mask is {w}×{h}",
+            previous.width(),
+            previous.height()
+        )));
+    }
+    let obj: Vec<bool> = seg.object.values().iter().map(|&v| v >= 0.5).collect();
+    if !obj.iter().any(|&o| o) {
+        return Err(SegmentError::new("no object to keep windows in"));
+    }
+    let win: Vec<bool> = previous
+        .labels()
+        .iter()
+        .map(|&l| l == LABEL_WINDOW)
+        .collect();
     labels(seg, &obj, &win)
 }
 

@@ -278,6 +278,12 @@ pub struct TreeProgress {
 pub struct TreeSession {
     eval: Evaluator,
     ga: TreeGa,
+    /// The start genome ([`TreeSession::with_start`]) until the first step evaluates it.
+    start: Option<Vec<f64>>,
+    /// Evaluations made outside the GA before the seed trials (the start's).
+    start_evaluations: usize,
+    /// The start's similarity, once evaluated.
+    start_similarity: Option<f64>,
     stage: u8,
     /// The seed in use after the seed trials (else `cfg.fixed_seed`).
     seed: Option<u32>,
@@ -300,6 +306,30 @@ impl TreeSession {
         view: View,
         cfg: &TreeFitConfig,
         mutation: Option<&MutationStats>,
+    ) -> Result<TreeSession, TreeError> {
+        TreeSession::with_start(reference, traits, view, cfg, mutation, None)
+    }
+
+    /// [`TreeSession::new`], from a tree when `start` is given (tree generator parameters,
+    /// sanitised: "Refit from here"). The start refines that tree instead of starting over:
+    ///
+    /// - its seed is kept: the GA runs with the start's `seed` fixed and there are no seed
+    ///   trials (their evaluations go to the local search), so its branches stay its own;
+    /// - jittered copies of it fill half of the preset-seeded share of every leaf GA's first
+    ///   population (the presets the other half, when [`TreeFitConfig::start_from_presets`]);
+    /// - the first step evaluates it exactly and holds it as the best tree, which later trees
+    ///   replace only when they are strictly more similar, so the result is never less
+    ///   similar than the start.
+    ///
+    /// Errors as [`TreeSession::new`] does, and on a start of the wrong length or with a
+    /// non-finite value.
+    pub fn with_start(
+        reference: &LabelImage,
+        traits: TreeTraits,
+        view: View,
+        cfg: &TreeFitConfig,
+        mutation: Option<&MutationStats>,
+        start: Option<&[f64]>,
     ) -> Result<TreeSession, TreeError> {
         if (reference.width(), reference.height()) != (view.width, view.height) {
             return Err(TreeError(format!(
@@ -329,7 +359,7 @@ impl TreeSession {
             .map(|_| TreeImpostor::new(view).map(Mutex::new))
             .collect::<Result<_, _>>()?;
         let g = TreeGenerator;
-        let start: Vec<Vec<f64>> = if cfg.start_from_presets {
+        let presets: Vec<Vec<f64>> = if cfg.start_from_presets {
             g.presets()
                 .iter()
                 .map(|p| params_to_genome(g.params(), &p.values))
@@ -337,19 +367,44 @@ impl TreeSession {
         } else {
             Vec::new()
         };
+        let mut cfg = *cfg;
+        let start_genome = match start {
+            Some(params) => {
+                let genome = params_to_genome(g.params(), params)
+                    .map_err(|e| TreeError(format!("the start tree: {}", e.0)))?;
+                // Sanitised, so the seed is a whole number in its range.
+                let spec = &g.params()[idx::SEED];
+                cfg.fixed_seed =
+                    Some((spec.min + genome[idx::SEED] * (spec.max - spec.min)).round() as u32);
+                cfg.polish += cfg.seed_trials;
+                cfg.seed_trials = 0;
+                Some(genome)
+            }
+            None => None,
+        };
+        // Leaf GAs take their seeded genomes from this list in turn: with a start, every
+        // other one is the start (the list's length is even, and so is each leaf's offset).
+        let seeds: Vec<Vec<f64>> = match &start_genome {
+            Some(s) if presets.is_empty() => vec![s.clone()],
+            Some(s) => presets.into_iter().flat_map(|p| [s.clone(), p]).collect(),
+            None => presets,
+        };
         let n = g.params().len();
         let ga = match mutation {
-            Some(stats) => TreeGa::new(n, &cfg.ga, Mutation::Quality(stats), &start)?,
-            None => TreeGa::new(n, &cfg.ga, Mutation::Gaussian, &start)?,
+            Some(stats) => TreeGa::new(n, &cfg.ga, Mutation::Quality(stats), &seeds)?,
+            None => TreeGa::new(n, &cfg.ga, Mutation::Gaussian, &seeds)?,
         };
         let defaults = params_to_genome(g.params(), &g.defaults())?;
         Ok(TreeSession {
             eval: Evaluator {
                 reference,
                 impostors,
-                cfg: *cfg,
+                cfg,
             },
             ga,
+            start: start_genome,
+            start_evaluations: 0,
+            start_similarity: None,
             stage: 1,
             seed: cfg.fixed_seed,
             best: Individual {
@@ -368,10 +423,24 @@ impl TreeSession {
         self.stage > 3
     }
 
+    /// The similarity of the start tree ([`TreeSession::with_start`]) once the first step has
+    /// evaluated it; `None` before, or without a start. The result's is never lower.
+    pub fn start_similarity(&self) -> Option<f64> {
+        self.start_similarity
+    }
+
     /// One bounded batch of work; returns where the fit stands (a no-op once done).
     pub fn step(&mut self) -> TreeProgress {
         match self.stage {
             1 => {
+                if let Some(genome) = self.start.take() {
+                    // The start tree itself, exactly (the GA only sees jittered copies): the
+                    // best until something is strictly more similar.
+                    let fitness = self.eval.fitness(&genome, self.seed);
+                    self.start_evaluations = 1;
+                    self.start_similarity = Some(fitness);
+                    self.best = Individual { genome, fitness };
+                }
                 let (eval, seed) = (&self.eval, self.seed);
                 let over = self.ga.step(&|g: &[f64]| eval.fitness(g, seed));
                 if let Some(b) = self.ga.best()
@@ -379,7 +448,7 @@ impl TreeSession {
                 {
                     self.best = b.clone();
                 }
-                self.evaluations = self.ga.evaluations();
+                self.evaluations = self.start_evaluations + self.ga.evaluations();
                 if over {
                     self.stage = 2;
                 }
@@ -463,6 +532,12 @@ impl TreeSession {
         }
     }
 
+    /// Evaluations the whole fit makes: its settings' and the start's.
+    fn total_evaluations(&self) -> usize {
+        let start = usize::from(self.start.is_some()) + self.start_evaluations;
+        self.eval.cfg.evaluations() + start
+    }
+
     fn best_params(&self) -> Vec<f64> {
         Evaluator::params(&self.best.genome, self.seed).unwrap_or_else(|_| TreeGenerator.defaults())
     }
@@ -479,7 +554,7 @@ impl TreeSession {
             stage: self.stage.min(3),
             generation: self.ga.generations(),
             evaluations: self.evaluations,
-            total_evaluations: self.eval.cfg.evaluations(),
+            total_evaluations: self.total_evaluations(),
             best_similarity: self.best.fitness,
             best_params: params,
             preview,
@@ -543,12 +618,14 @@ pub struct PhotoTreeFit {
 /// Starts the fit of a photo's (or label image's) tree, as the CLI and the page run it:
 /// framed into [`PHOTO_FIT_SIZE`]², seen by [`tree_view`]`(…, 12.0)`, default settings with
 /// Gaussian mutation, the GA seeded by `seed` and, when `budget` is given, about that many
-/// GA evaluations ([`GaConfig::generations_for`]). Errors, in words, on labels without a tree,
-/// without leaves or without branches.
+/// GA evaluations ([`GaConfig::generations_for`]); from the tree `start` when given (its
+/// parameters; see [`TreeSession::with_start`]). Errors, in words, on labels without a tree,
+/// without leaves or without branches, and on a start that is not a tree's parameters.
 pub fn start_photo_fit(
     labels: &LabelImage,
     seed: u64,
     budget: Option<usize>,
+    start: Option<&[f64]>,
 ) -> Result<PhotoTreeFit, TreeError> {
     let (reference, framing) = frame_reference_with(labels, PHOTO_FIT_SIZE)?;
     let view = tree_view(PHOTO_FIT_SIZE, PHOTO_FIT_SIZE, 12.0)?;
@@ -559,7 +636,8 @@ pub fn start_photo_fit(
     }
     // Plain Gaussian mutation: on the tree fit it does better than Algorithm 3 (see
     // `super::mutation`'s module doc for the numbers).
-    let session = TreeSession::new(&reference, TreeTraits::default(), view, &cfg, None)?;
+    let session =
+        TreeSession::with_start(&reference, TreeTraits::default(), view, &cfg, None, start)?;
     Ok(PhotoTreeFit { session, framing })
 }
 

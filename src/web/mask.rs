@@ -3,7 +3,8 @@
 //! canvas; masks go out as 8-bit codes (object 255, background 0, don't care 128 — the same
 //! as [`Mask::to_luma8`](crate::mask::Mask::to_luma8)), in working-image pixels.
 
-use crate::segment::windows::{detect_windows, windows_from_strokes};
+use crate::mask::LabelImage;
+use crate::segment::windows::{clip_windows, detect_windows, windows_from_strokes};
 use crate::segment::{BBox, Label, Options, Photo, Session, Stroke, WORKING_SIDE};
 use wasm_bindgen::prelude::*;
 
@@ -140,6 +141,24 @@ impl MaskSession {
         let labels =
             windows_from_strokes(&self.photo, self.session.segmentation(), &strokes).map_err(js)?;
         Ok(labels.labels().to_vec())
+    }
+
+    /// Window labels made for an earlier mask (`labels`, as the two calls above give them)
+    /// fitted to the current one: windows outside the object dropped, the rest as before (see
+    /// `segment::windows::clip_windows`). For painted windows after a mask correction.
+    #[wasm_bindgen(js_name = clipWindows)]
+    pub fn clip_windows(&self, labels: &[u8]) -> Result<Vec<u8>, JsError> {
+        let s = self.session.segmentation();
+        let (w, h) = (s.object.width(), s.object.height());
+        if labels.len() != (w as usize) * (h as usize) {
+            return Err(JsError::new(&format!(
+                "{} window labels for a {w}×{h} mask",
+                labels.len()
+            )));
+        }
+        let previous = LabelImage::new(w, h, labels.to_vec()).map_err(js)?;
+        let clipped = clip_windows(s, &previous).map_err(js)?;
+        Ok(clipped.labels().to_vec())
     }
 
     /// The mask for the fit: object 255, background 0, don't care 128 (a band along the

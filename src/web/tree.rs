@@ -8,13 +8,16 @@
 //! // A photo: RGBA bytes (width × height × 4), labelled by colour (green → leaf, brown/grey →
 //! // branch); `codes` is the mask step's output (0 background, 128 don't care, else object;
 //! // one byte a pixel) or an empty array to label the whole photo. `budget`: GA evaluations,
-//! // 0 for the default (≈ 4 700).
-//! // `colors`: the colour rules, an object of `ColorThresholds`' camelCase fields (any left out
-//! // keep their defaults: `{ leafHue: [330, 170], restAsBranch: true }`), or undefined.
-//! const fit = new TreeFitSession(width, height, rgba, codes, seed, budget, colors);
+//! // 0 for the default (≈ 4 700). `start`: a tree's parameters (Float64Array) to refit from
+//! // ("Refit from here": its seed is kept, the result is never less similar than it), or an
+//! // empty array to fit from scratch. `colors`: the colour rules, an object of
+//! // `ColorThresholds`' camelCase fields (any left out keep their defaults:
+//! // `{ leafHue: [330, 170], restAsBranch: true }`), or undefined.
+//! const fit = new TreeFitSession(width, height, rgba, codes, seed, budget, start, colors);
 //! // Or a label image: 0 background, 1 branch, 2 leaf, 255 don't care.
-//! const fit = TreeFitSession.fromLabels(width, height, labels, seed, budget);
-//! // Both throw an Error with a sentence for a mask with no tree, no leaves or no branches.
+//! const fit = TreeFitSession.fromLabels(width, height, labels, seed, budget, start);
+//! // Both throw an Error with a sentence for a mask with no tree, no leaves or no branches,
+//! // or a start that is not a tree's parameters.
 //! const p = fit.step(); // one GA generation (or the seed trials, or a local-search round)
 //! // p = { stage: 1 | 2 | 3, generation, evaluations, total_evaluations,
 //! //       best_similarity, params: number[], done }
@@ -22,7 +25,8 @@
 //!   const labels = fit.previewLabels();    // Uint8Array, previewWidth × previewHeight (128²)
 //! }
 //! const labels = treeLabels(width, height, rgba, codes, colors); // the same labels, to show
-//! const r = fit.result(); // { generator: "tree", params, lod, seed, similarity, evaluations,
+//! const r = fit.result(); // { generator: "tree", params, lod, seed, similarity,
+//! //                          start_similarity (undefined without a start), evaluations,
 //! //                          cameras: Float32Array-able number[18] (yfov, aspect, 16 floats
 //! //                          camera-to-world, column-major): the photo's camera for generateGlb }
 //! ```
@@ -66,6 +70,8 @@ struct ResultOut {
     lod: u8,
     seed: u32,
     similarity: f64,
+    /// The start tree's similarity (`None` without a start, or before the first step).
+    start_similarity: Option<f64>,
     evaluations: usize,
     cameras: Vec<f32>,
 }
@@ -79,9 +85,15 @@ fn budget_of(budget: u32) -> Result<Option<usize>, JsError> {
 }
 
 impl TreeFitSession {
-    fn start(labels: &LabelImage, seed: u32, budget: u32) -> Result<TreeFitSession, JsError> {
+    fn start(
+        labels: &LabelImage,
+        seed: u32,
+        budget: u32,
+        start: &[f64],
+    ) -> Result<TreeFitSession, JsError> {
+        let start = (!start.is_empty()).then_some(start);
         let PhotoTreeFit { session, framing } =
-            start_photo_fit(labels, u64::from(seed), budget_of(budget)?).map_err(js)?;
+            start_photo_fit(labels, u64::from(seed), budget_of(budget)?, start).map_err(js)?;
         Ok(TreeFitSession {
             session,
             framing,
@@ -136,7 +148,8 @@ fn photo_labels(
 
 #[wasm_bindgen]
 impl TreeFitSession {
-    /// Starts a fit to a photo (see the module doc); nothing is evaluated yet.
+    /// Starts a fit to a photo, from the tree `start` unless it is empty (see the module
+    /// doc); nothing is evaluated yet.
     #[wasm_bindgen(constructor)]
     pub fn new(
         width: u32,
@@ -145,12 +158,14 @@ impl TreeFitSession {
         codes: &[u8],
         seed: u32,
         budget: u32,
+        start: &[f64],
         colors: JsValue,
     ) -> Result<TreeFitSession, JsError> {
         TreeFitSession::start(
             &photo_labels(width, height, rgba, codes, colors)?,
             seed,
             budget,
+            start,
         )
     }
 
@@ -162,9 +177,10 @@ impl TreeFitSession {
         labels: &[u8],
         seed: u32,
         budget: u32,
+        start: &[f64],
     ) -> Result<TreeFitSession, JsError> {
         let labels = labels_from_values(width, height, labels.to_vec()).map_err(js)?;
-        TreeFitSession::start(&labels, seed, budget)
+        TreeFitSession::start(&labels, seed, budget, start)
     }
 
     /// One bounded slice of work; returns where the fit stands.
@@ -219,6 +235,7 @@ impl TreeFitSession {
             lod: crate::generators::Lod::High as u8,
             seed: self.seed,
             similarity: fit.similarity,
+            start_similarity: self.session.start_similarity(),
             evaluations: fit.ga.evaluations,
             cameras,
         };

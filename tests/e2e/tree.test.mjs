@@ -1,7 +1,8 @@
 // Trees in the page: on the bundled tree sample (an oak rendered by procfit itself, bark brown
 // and leaf green; see scripts/make-samples.mjs), the mask step shows what the tree fit sees
 // (branches brown, leaves green), the tree fit runs with progress and can be cancelled, and its
-// tree lands in the viewer with its sliders and downloads as a valid GLB.
+// tree lands in the viewer with its sliders and downloads as a valid GLB; "Refit from here"
+// refits the edited tree from where it is.
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { readFileSync } from 'node:fs';
@@ -139,6 +140,58 @@ test('the fitted tree downloads as a valid GLB with the photo camera', async () 
     externalResourceFunction: (uri) => Promise.reject(new Error(`external resource ${uri}`)),
   });
   assert.equal(report.issues.numErrors, 0, JSON.stringify(report.issues.messages.slice(0, 5)));
+});
+
+test('"Refit from here" refits the edited tree: its seed stays, it never gets less like the photo', async () => {
+  // The fitted tree as a person left it: one slider moved by hand.
+  await settled();
+  assert.equal(await page.isDisabled('#refit'), false, 'Refit from here is disabled for a fitted tree');
+  const seedAt = await page.evaluate(() => window.procfit.editor.spec.params.findIndex((p) => p.name === 'seed'));
+  const moved = await page.evaluate(() => window.procfit.editor.spec.params.find((p) => p.name !== 'seed' && p.kind === 'continuous')?.name ?? null);
+  if (moved) {
+    await page.focus(`#param-${moved}`);
+    await page.keyboard.press('ArrowUp');
+    await settled();
+  }
+  const start = await page.evaluate(() => window.procfit.editor.params.slice());
+  // Record what the page asks the worker for, and what comes back.
+  await page.evaluate(() => {
+    const client = window.procfit.client;
+    const call = client.call.bind(client);
+    window.treeRuns = [];
+    client.call = (type, payload, opts) => {
+      const answer = call(type, payload, opts);
+      if (type === window.procfit.REQUESTS.TREE_RUN) {
+        const run = { start: payload.start ?? null, result: null };
+        window.treeRuns.push(run);
+        answer.then((out) => (run.result = out.result), () => {});
+      }
+      return answer;
+    };
+  });
+  await page.selectOption('#fit-quality', '0.25');
+  await page.evaluate(() => delete document.body.dataset.fitted);
+  await page.click('#refit');
+  await page.waitForFunction(() => document.body.dataset.fitted, null, { timeout: 600000 });
+  assert.equal(await page.evaluate(() => document.body.dataset.fitted), 'done', await messageOf('fit-message'));
+  const runs = await page.evaluate(() => window.treeRuns);
+  assert.equal(runs.length, 1, 'the refit made no tree fit');
+  assert.deepEqual(runs[0].start, start, 'the refit did not start from the sliders');
+  const r = runs[0].result;
+  assert.equal(r.generator, 'tree');
+  assert.equal(typeof r.start_similarity, 'number', 'the refit did not evaluate its start');
+  assert.ok(r.similarity >= r.start_similarity, `refit ended at ${r.similarity}, below its start ${r.start_similarity}`);
+  assert.equal(r.params[seedAt], start[seedAt], "the refit changed the tree's seed");
+  await settled();
+  // The model stays a tree, the refit's, with its sliders.
+  const after = await page.evaluate(() => ({ generator: window.procfit.editor.spec.name, params: window.procfit.editor.params.slice() }));
+  assert.equal(after.generator, 'tree');
+  assert.deepEqual(after.params, r.params);
+  assert.equal(await page.inputValue('#preset'), 'fitted');
+  assert.match(await messageOf('fit-message'), /similarity to the photo \d\.\d{3} → \d\.\d{3}|nothing closer to the photos/);
+  console.log(`# tree refit (quick): similarity ${r.start_similarity.toFixed(3)} → ${r.similarity.toFixed(3)}`);
+  await screenshot(page, '11c-tree-refitted');
+  assert.equal(await page.isDisabled('#refit'), false);
 });
 
 test('a tree fit can be cancelled and keeps the best tree so far', async () => {

@@ -1,7 +1,8 @@
 // Windows for buildings: on the bundled building sample (a block of flats rendered by procfit
 // itself, see scripts/make-samples.mjs), the mask step offers the windows tools; windows are
 // found automatically (from the keyboard) and corrected with the windows brush, drawn in their
-// own tint, sent to the fit with the mask, and kept across a reload.
+// own tint, sent to the fit with the mask, kept across a reload, and follow a corrected mask
+// (automatic ones found again, painted ones clipped).
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { readFileSync } from 'node:fs';
@@ -235,6 +236,147 @@ test('windows survive a reload', async () => {
   assert.ok(after.every((c, i) => c === before[i]), 'the window labels changed across the reload');
   assert.equal(await page.isVisible('#window-tools'), true);
   assert.match(await page.textContent('#windows-state'), /Windows marked/);
+});
+
+/** The selected photo's mask codes, window codes and window-stroke count, as plain arrays. */
+const maskAndWindows = () =>
+  page.evaluate(() => {
+    const p = window.procfit.state.photos[0];
+    return {
+      mask: Array.from(p.mask.codes),
+      windows: Array.from(p.windows?.codes ?? []),
+      strokes: p.windows?.strokes?.length ?? 0,
+      bbox: p.mask.bbox,
+      width: p.mask.width,
+      height: p.mask.height,
+    };
+  });
+
+/** Drags the box tool over working pixels [x0, y0, x1, y1] and waits until the windows line reads `note`. */
+async function boxTo([x0, y0, x1, y1], note) {
+  await page.check('input[name="tool"][value="rect"]');
+  const at = await overlayAt((x0 + x1) / 2, (y0 + y1) / 2);
+  const before = await page.evaluateHandle(() => window.procfit.state.photos[0].mask.codes);
+  await page.mouse.move(...at(x0, y0));
+  await page.mouse.down();
+  await page.mouse.move(...at(x1, y1), { steps: 4 });
+  await page.mouse.up();
+  await page.waitForFunction((b) => window.procfit.state.photos[0].mask.codes !== b, before, { timeout: 30000 });
+  await page.waitForFunction((n) => document.getElementById('windows-state').textContent.includes(n), note, { timeout: 30000 });
+  await page.check('input[name="tool"][value="none"]');
+}
+
+/** Window pixels (2) where the mask says background (0). */
+const windowsOutside = ({ mask, windows }) => windows.filter((c, i) => c === 2 && mask[i] === 0).length;
+
+test('a mask correction finds automatic windows again, inside the new mask', async () => {
+  await page.evaluate(() => window.procfit.state.photos[0].reviving);
+  // One automatic window (the top one in the building's left quarter, inside the box below)
+  // taken out with the wall brush first: it must stay out when the windows are found again.
+  const erased = await page.evaluate(() => {
+    const p = window.procfit.state.photos[0];
+    const { width } = p.mask;
+    const [x0, , x1] = p.mask.bbox;
+    const i = p.windows.codes.findIndex((c, j) => c === 2 && j % width < x0 + (x1 - x0) / 4);
+    return { i, x: i % width, y: Math.floor(i / width) };
+  });
+  await page.check('input[name="tool"][value="wall"]');
+  const at = await overlayAt(erased.x, erased.y);
+  const codes = await page.evaluateHandle(() => window.procfit.state.photos[0].windows.codes);
+  await page.mouse.move(...at(erased.x + 2, erased.y + 2));
+  await page.mouse.down();
+  await page.mouse.move(...at(erased.x + 4, erased.y + 4), { steps: 2 });
+  await page.mouse.up();
+  await page.waitForFunction((b) => window.procfit.state.photos[0].windows.codes !== b, codes, { timeout: 30000 });
+  await page.check('input[name="tool"][value="none"]');
+  const before = await maskAndWindows();
+  assert.equal(before.strokes, 0, 'the windows should be the automatic ones here');
+  assert.equal(before.windows[erased.i], 1, 'the wall brush left the window');
+  // The mask corrected to a box around the left half of the building.
+  const [x0, y0, x1, y1] = before.bbox;
+  const half = [Math.max(0, x0 - 8), Math.max(0, y0 - 8), Math.round((x0 + x1) / 2), Math.min(before.height, y1 + 8)];
+  await boxTo(half, 'Windows found again');
+  const after = await maskAndWindows();
+  // The old windows would stick out of the new mask: what this test is about.
+  const stale = windowsOutside({ mask: after.mask, windows: before.windows });
+  assert.ok(stale > 100, `only ${stale} old window pixels outside the corrected mask`);
+  assert.equal(windowsOutside(after), 0, 'window pixels outside the corrected mask');
+  const fresh = await page.evaluate(async () => {
+    const { client, REQUESTS, state } = window.procfit;
+    return Array.from(new Uint8Array((await client.call(REQUESTS.MASK_WINDOWS_AUTO, { key: String(state.photos[0].id) })).codes));
+  });
+  // Exactly what finding windows in the corrected mask gives, but for the erased window.
+  let stillErased = 0;
+  const differ = [];
+  after.windows.forEach((c, i) => {
+    if (fresh[i] === 2 && c === 1) stillErased += 1;
+    else if (c !== fresh[i]) differ.push(i);
+  });
+  assert.deepEqual(differ.slice(0, 5), [], `${differ.length} labels differ from the windows found in the corrected mask`);
+  assert.ok(stillErased > 0 && after.windows[erased.i] === 1, 'the erased window came back when the windows were found again');
+  const s = await windowStats();
+  assert.ok(s.win > 0 && s.share < 0.5, `windows are ${(100 * s.share).toFixed(1)} % of the corrected building`);
+  assert.match(await page.textContent('#windows-state'), /Windows marked in teal: \d+ %.*Windows found again in the corrected mask/);
+  await screenshot(page, '10d-windows-redetected');
+  await page.locator('#photo-view').screenshot({ path: join(ARTIFACTS, '10d-windows-redetected-photo.png') });
+});
+
+test('painted windows are kept after a mask correction, clipped to the new mask', async () => {
+  // One window painted with the windows brush (the top one in the building's left quarter):
+  // the windows are the person's now.
+  const target = await page.evaluate(() => {
+    const p = window.procfit.state.photos[0];
+    const { width } = p.mask;
+    const [x0, , x1] = p.mask.bbox;
+    const i = p.windows.codes.findIndex((c, j) => c === 2 && j % width < x0 + (x1 - x0) / 4);
+    return { x: i % width, y: Math.floor(i / width) };
+  });
+  await page.check('input[name="tool"][value="window"]');
+  await page.fill('#brush', '2');
+  await page.dispatchEvent('#brush', 'input');
+  const at = await overlayAt(target.x, target.y);
+  const codes = await page.evaluateHandle(() => window.procfit.state.photos[0].windows.codes);
+  await page.mouse.move(...at(target.x, target.y));
+  await page.mouse.down();
+  await page.mouse.move(...at(target.x + 1, target.y), { steps: 2 });
+  await page.mouse.up();
+  await page.waitForFunction((b) => window.procfit.state.photos[0].windows.codes !== b, codes, { timeout: 30000 });
+  await page.fill('#brush', '10');
+  await page.dispatchEvent('#brush', 'input');
+  const before = await maskAndWindows();
+  assert.equal(before.strokes, 1);
+  console.log(`# painted windows: ${JSON.stringify(await windowStats())}`);
+  await page.locator('#photo-view').screenshot({ path: join(ARTIFACTS, '10e-windows-painted-photo.png') });
+  // The mask corrected again: "not the building" painted with the background brush down the
+  // painted window's column.
+  const [, y0, , y1] = before.bbox;
+  await page.check('input[name="tool"][value="background"]');
+  const down = await overlayAt(target.x, (y0 + y1) / 2);
+  const mask = await page.evaluateHandle(() => window.procfit.state.photos[0].mask.codes);
+  await page.mouse.move(...down(target.x, y0 + 4));
+  await page.mouse.down();
+  await page.mouse.move(...down(target.x, y1 - 4), { steps: 8 });
+  await page.mouse.up();
+  await page.waitForFunction((b) => window.procfit.state.photos[0].mask.codes !== b, mask, { timeout: 30000 });
+  await page.waitForFunction(() => document.getElementById('windows-state').textContent.includes('painted windows are kept'), null, { timeout: 30000 });
+  await page.check('input[name="tool"][value="none"]');
+  const after = await maskAndWindows();
+  assert.equal(after.strokes, 1, 'the painted strokes were dropped');
+  assert.ok(windowsOutside({ mask: after.mask, windows: before.windows }) > 0, 'the correction left every painted window inside');
+  assert.equal(windowsOutside(after), 0, 'painted window pixels outside the corrected mask');
+  // Kept, not found again: inside the new object the labels are the painted ones.
+  let changed = 0;
+  let kept = 0;
+  after.mask.forEach((m, i) => {
+    if (m !== 255) return;
+    if ((after.windows[i] === 2) !== (before.windows[i] === 2)) changed += 1;
+    else if (after.windows[i] === 2) kept += 1;
+  });
+  await page.locator('#photo-view').screenshot({ path: join(ARTIFACTS, '10e-windows-clipped-photo.png') });
+  assert.equal(changed, 0, `${changed} labels inside the corrected mask changed`);
+  assert.ok(kept > 0, 'no painted window is left');
+  assert.match(await page.textContent('#windows-state'), /Windows marked in teal: \d+ %.*Your painted windows are kept, cut to the corrected mask/);
+  await screenshot(page, '10e-windows-clipped');
 });
 
 test('no console errors, no page errors, no request outside the origin', () => {
