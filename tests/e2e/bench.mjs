@@ -104,7 +104,9 @@ try {
   // the ceiling, see `cargo bench --bench tree`).
   const trees = [];
   {
-    const { page } = await openPage(browser.context, server.url);
+    // A fresh profile: the pages above saved their session, which this one would restore.
+    const fresh = await launchBrowser();
+    const { page } = await openPage(fresh.context, server.url);
     await page.waitForSelector('body[data-ready="true"]', { timeout: 120000 });
     const oak = JSON.parse(await (await fetch(`${server.url}www/samples/index.json`)).text()).samples.find((x) => x.name === 'oak');
     await page.click('button[data-sample="oak"]');
@@ -127,6 +129,7 @@ try {
       trees.push({ seconds, iou, evaluations: (message.match(/\(([\d,]+) evaluations/) || [])[1] });
     }
     await page.close();
+    await fresh.close();
   }
   console.log(`\nOak sample tree fit (Normal effort, ${threads} threads), 2 runs: median ${median(trees.map((f) => f.seconds)).toFixed(1)} s, IoU-64 vs truth ${trees.map((f) => f.iou.toFixed(3)).join(', ')} (${trees[0].evaluations} evaluations; target ≤ 120 s)`);
   console.log(`\nSlider → new frame during a running fit (MEDIUM, ${during.length} moves): median ${median(during).toFixed(1)} ms, max ${Math.max(...during).toFixed(1)} ms`);
