@@ -199,16 +199,16 @@ const TREE_EVALUATIONS = 4700;
 /** A tree fit, stepped in slices like runFit. */
 async function runTreeFit({ fitId, seed = 1, quality = 1, width, height, rgba, codes, start = [], colors }, emit) {
   const budget = quality === 1 ? 0 : Math.max(200, Math.round(TREE_EVALUATIONS * quality));
-  const session = new wasm.TreeFitSession(
+  // The photo's labels under its colour rules: exactly what the mask step shows.
+  const labels = wasm.treeLabels(width, height, new Uint8Array(rgba), new Uint8Array(codes ?? 0), colors ?? undefined);
+  const session = wasm.TreeFitSession.fromLabels(
     width,
     height,
-    new Uint8Array(rgba),
-    new Uint8Array(codes ?? 0),
+    labels,
     seed,
     budget,
     // Empty: from scratch; else the tree to refit from ("Refit from here").
     Float64Array.from(start ?? []),
-    colors ?? undefined,
   );
   return stepFit(fitId, session, emit, () => {
     // A preview comes only with the step that changed the best tree: always pass it on.

@@ -10,11 +10,13 @@
 //! // one byte a pixel) or an empty array to label the whole photo. `budget`: GA evaluations,
 //! // 0 for the default (≈ 4 700). `start`: a tree's parameters (Float64Array) to refit from
 //! // ("Refit from here": its seed is kept, the result is never less similar than it), or an
-//! // empty array to fit from scratch. `colors`: the colour rules, an object of
-//! // `ColorThresholds`' camelCase fields (any left out keep their defaults:
-//! // `{ leafHue: [330, 170], restAsBranch: true }`), or undefined.
-//! const fit = new TreeFitSession(width, height, rgba, codes, seed, budget, start, colors);
-//! // Or a label image: 0 background, 1 branch, 2 leaf, 255 don't care.
+//! // empty array to fit from scratch. The photo is labelled with the default colours.
+//! const fit = new TreeFitSession(width, height, rgba, codes, seed, budget, start);
+//! // Or a label image: 0 background, 1 branch, 2 leaf, 255 don't care — such as the labels of
+//! // a photo under other colour rules: `colors` is an object of `ColorThresholds`' camelCase
+//! // fields (any left out keep their defaults: `{ leafHue: [330, 170], restAsBranch: true }`)
+//! // or undefined for the defaults.
+//! const labels = treeLabels(width, height, rgba, codes, colors); // also what the page shows
 //! const fit = TreeFitSession.fromLabels(width, height, labels, seed, budget, start);
 //! // Both throw an Error with a sentence for a mask with no tree, no leaves or no branches,
 //! // or a start that is not a tree's parameters.
@@ -24,7 +26,6 @@
 //! if (fit.previewWidth() > 0) {            // the best tree's labels changed in this step
 //!   const labels = fit.previewLabels();    // Uint8Array, previewWidth × previewHeight (128²)
 //! }
-//! const labels = treeLabels(width, height, rgba, codes, colors); // the same labels, to show
 //! const r = fit.result(); // { generator: "tree", params, lod, seed, similarity,
 //! //                          start_similarity (undefined without a start), evaluations,
 //! //                          cameras: Float32Array-able number[18] (yfov, aspect, 16 floats
@@ -159,10 +160,9 @@ impl TreeFitSession {
         seed: u32,
         budget: u32,
         start: &[f64],
-        colors: JsValue,
     ) -> Result<TreeFitSession, JsError> {
         TreeFitSession::start(
-            &photo_labels(width, height, rgba, codes, colors)?,
+            &photo_labels(width, height, rgba, codes, JsValue::UNDEFINED)?,
             seed,
             budget,
             start,
