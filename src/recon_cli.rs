@@ -55,6 +55,26 @@ pub struct ReconstructArgs {
     /// rest within 0–1), e.g. '{"leafHue":[330,170],"leafMinValue":0.45}' for autumn leaves.
     #[arg(long)]
     tree_colors: Option<String>,
+    /// Refit from a model: a params JSON or a GLB written by procfit (the page's "Refit from
+    /// here"). Its generator is the one fitted (`--generator` may be left out or must agree);
+    /// a tree keeps its seed and never ends less like the photo than the start.
+    #[arg(long)]
+    start: Option<PathBuf>,
+}
+
+/// The model `--start` names: a params JSON or a procfit GLB.
+fn load_start(path: &Path) -> Result<Model, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let model = if bytes.starts_with(b"glTF") {
+        glb::import_glb(&bytes)
+            .and_then(|g| g.model())
+            .map_err(|e| e.to_string())
+    } else {
+        std::str::from_utf8(&bytes)
+            .map_err(|_| "neither a GLB nor params JSON".to_string())
+            .and_then(|t| Model::from_json(t).map_err(|e| e.to_string()))
+    };
+    model.map_err(|e| format!("--start {}: {e}", path.display()))
 }
 
 /// `procfit render`.
@@ -163,8 +183,23 @@ fn seconds(s: f64) -> String {
 
 /// `procfit reconstruct`: fit, progress on stderr, GLB (and params JSON) out.
 pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
-    if a.generator == "tree" {
-        return reconstruct_tree(a);
+    let start = a.start.as_deref().map(load_start).transpose()?;
+    let generator = match &start {
+        Some(m) if a.generator == "auto" || a.generator == m.generator.name() => {
+            m.generator.name().to_string()
+        }
+        Some(m) => {
+            return Err(format!(
+                "--start is a {} model, --generator says {}",
+                m.generator.name(),
+                a.generator
+            ));
+        }
+        None => a.generator.clone(),
+    };
+    let start = start.map(|m| m.params);
+    if generator == "tree" {
+        return reconstruct_tree(a, start.as_deref());
     }
     if a.tree_colors.is_some() {
         return Err("--tree-colors is for --generator tree".into());
@@ -178,7 +213,8 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
     let fov_y = views.iter().map(|v| a.fov.or(v.1)).collect();
     let masks = views.into_iter().map(|v| v.0).collect::<Vec<_>>();
     let config = FitConfig {
-        generator: a.generator.clone(),
+        generator,
+        start,
         seed: a.seed,
         quality: a.quality,
         budget: a.budget,
@@ -286,7 +322,7 @@ fn load_tree_labels(
 
 /// `procfit reconstruct --generator tree`: the tree GA on one image, progress on stderr, the
 /// GLB with the photo's camera (and params JSON) out.
-fn reconstruct_tree(a: &ReconstructArgs) -> Result<(), String> {
+fn reconstruct_tree(a: &ReconstructArgs, from: Option<&[f64]>) -> Result<(), String> {
     let [image] = &a.images[..] else {
         return Err(format!(
             "a tree is fitted to one image, not {}",
@@ -297,7 +333,7 @@ fn reconstruct_tree(a: &ReconstructArgs) -> Result<(), String> {
     let procfit::tree::impostor::PhotoTreeFit {
         mut session,
         framing,
-    } = procfit::tree::impostor::start_photo_fit(&labels, a.seed, a.budget, None)
+    } = procfit::tree::impostor::start_photo_fit(&labels, a.seed, a.budget, from)
         .map_err(|e| format!("{}: {e}", image.display()))?;
     let start = Instant::now();
     let mut last_draw = -1.0f64;
@@ -327,8 +363,12 @@ fn reconstruct_tree(a: &ReconstructArgs) -> Result<(), String> {
     let name = image.file_name().map(|n| n.to_string_lossy().into_owned());
     let cameras = [reconstruct::export_camera(&photo_view, name)];
     write_outputs(a, &model, &cameras)?;
+    let from = session
+        .start_similarity()
+        .map(|s| format!(" (the start's {s:.3})"))
+        .unwrap_or_default();
     println!(
-        "wrote {}: tree fitted to 1 view in {:.1} s, {} evaluations, similarity {:.3}",
+        "wrote {}: tree fitted to 1 view in {:.1} s, {} evaluations, similarity {:.3}{from}",
         a.output.display(),
         start.elapsed().as_secs_f64(),
         fit.ga.evaluations,

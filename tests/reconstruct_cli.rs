@@ -130,6 +130,49 @@ fn render_reconstruct_eval_round_trip() {
     // The GLB's camera must re-project the model onto the input mask.
     assert!(value("input-view IoU:") > 0.95, "{text}");
     assert!(value("IoU-64:") > 0.9, "{text}");
+
+    // Refit from the fitted GLB: the generator comes from it; a contradicting one is refused.
+    let refit = scratch("refit.glb");
+    let out = procfit(&[
+        "reconstruct",
+        "--start",
+        s(&glb),
+        "--fov",
+        "0.5",
+        "--budget",
+        "300",
+        "--quality",
+        "0.5",
+        "--restarts",
+        "1",
+        s(&mask),
+        "-o",
+        s(&refit),
+    ]);
+    let said = String::from_utf8_lossy(&out.stdout).to_string();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(said.contains("dish fitted"), "{said}");
+    for (args, needle) in [
+        (
+            vec!["--generator", "building", "--start", s(&params)],
+            "is a dish model",
+        ),
+        (vec!["--start", s(&mask)], "neither a GLB nor params JSON"),
+        (vec!["--start", "missing.json"], "cannot read"),
+    ] {
+        let mut all = vec!["reconstruct"];
+        all.extend(args);
+        all.extend([s(&mask), "-o", s(&refit)]);
+        let out = procfit(&all);
+        let err = String::from_utf8_lossy(&out.stderr).to_string();
+        assert!(!out.status.success(), "{all:?} should fail");
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert!(err.contains(needle), "`{err}` lacks `{needle}`");
+    }
 }
 
 #[test]

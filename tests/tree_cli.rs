@@ -115,6 +115,46 @@ fn photo_to_glb_with_its_camera() {
     let iou = procfit::reconstruct::eval::view_iou(&mesh, &view, &mask).expect("iou");
     println!("input-view IoU {iou:.3}");
     assert!(iou > 0.5, "input-view IoU {iou}");
+
+    // Refit from the params written: the tree keeps its seed and never gets less similar.
+    let refit = scratch("tree-refit.json");
+    let out = procfit(&[
+        "reconstruct",
+        "--start",
+        s(&params),
+        "--budget",
+        "200",
+        s(&photo),
+        "-o",
+        s(&scratch("tree-refit.glb")),
+        "--params-out",
+        s(&refit),
+    ]);
+    let said = String::from_utf8_lossy(&out.stdout).to_string();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let number = |after: &str| -> f64 {
+        let i = said
+            .find(after)
+            .unwrap_or_else(|| panic!("`{said}` lacks `{after}`"))
+            + after.len();
+        said[i..]
+            .split(|c: char| !(c.is_ascii_digit() || c == '.'))
+            .next()
+            .and_then(|x| x.parse().ok())
+            .unwrap_or_else(|| panic!("no number after `{after}` in `{said}`"))
+    };
+    let (now, before) = (number("similarity "), number("the start's "));
+    assert!(now >= before, "{said}");
+    let seed = |p: &PathBuf| {
+        procfit::model::Model::from_json(&std::fs::read_to_string(p).expect("json"))
+            .expect("params")
+            .params[procfit::generators::tree::idx::SEED]
+    };
+    assert_eq!(seed(&refit), seed(&params));
 }
 
 #[test]
