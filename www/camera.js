@@ -106,6 +106,9 @@ export class CameraCapture {
   }
 
   close() {
+    // Released now, not when the dialog's close event comes (a task later); Escape closes
+    // through that event.
+    this.stop();
     this.dialog.close();
   }
 }
