@@ -2,25 +2,13 @@
 //! render → reconstruct → eval round trip, and bad input ending in one line on stderr with a
 //! non-zero exit code.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod cli_support;
 
-fn procfit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_procfit"))
-        .args(args)
-        .output()
-        .unwrap()
-}
+use cli_support::{fails_with, procfit, run_ok, s};
+use std::path::{Path, PathBuf};
 
 fn scratch(name: &str) -> PathBuf {
-    // Under target/tmp (cargo clean removes it), not the system temp dir.
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("recon-cli");
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
+    cli_support::scratch("recon-cli", name)
 }
 
 fn write_png(path: &Path, w: u32, h: u32, f: impl Fn(u32, u32) -> u8) {
@@ -47,7 +35,7 @@ fn render_reconstruct_eval_round_trip() {
     )
     .unwrap();
     let mask = scratch("mug.png");
-    let out = procfit(&[
+    run_ok(&[
         "render",
         "--generator",
         "dish",
@@ -60,13 +48,8 @@ fn render_reconstruct_eval_round_trip() {
         "-o",
         s(&mask),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let (glb, params) = (scratch("fit.glb"), scratch("fit.json"));
-    let out = procfit(&[
+    let (_, err) = run_ok(&[
         "reconstruct",
         "--generator",
         "dish",
@@ -82,8 +65,6 @@ fn render_reconstruct_eval_round_trip() {
         "--params-out",
         s(&params),
     ]);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{err}");
     assert!(
         err.contains("stage 3/3") && err.contains("ETA"),
         "progress: {err}"
@@ -104,7 +85,7 @@ fn render_reconstruct_eval_round_trip() {
         .status
         .success()
     );
-    let out = procfit(&[
+    let (text, _) = run_ok(&[
         "eval",
         "--reference",
         s(&reference),
@@ -112,12 +93,6 @@ fn render_reconstruct_eval_round_trip() {
         "--mask",
         s(&mask),
     ]);
-    let text = String::from_utf8_lossy(&out.stdout).to_string();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let value = |key: &str| -> f64 {
         let line = text.lines().find(|l| l.starts_with(key)).unwrap();
         line[key.len()..]
@@ -133,7 +108,7 @@ fn render_reconstruct_eval_round_trip() {
 
     // Refit from the fitted GLB: the generator comes from it; a contradicting one is refused.
     let refit = scratch("refit.glb");
-    let out = procfit(&[
+    let (said, _) = run_ok(&[
         "reconstruct",
         "--start",
         s(&glb),
@@ -149,12 +124,6 @@ fn render_reconstruct_eval_round_trip() {
         "-o",
         s(&refit),
     ]);
-    let said = String::from_utf8_lossy(&out.stdout).to_string();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     assert!(said.contains("dish fitted"), "{said}");
     for (args, needle) in [
         (
@@ -167,23 +136,13 @@ fn render_reconstruct_eval_round_trip() {
         let mut all = vec!["reconstruct"];
         all.extend(args);
         all.extend([s(&mask), "-o", s(&refit)]);
-        let out = procfit(&all);
-        let err = String::from_utf8_lossy(&out.stderr).to_string();
-        assert!(!out.status.success(), "{all:?} should fail");
-        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
-        assert!(err.contains(needle), "`{err}` lacks `{needle}`");
+        fails_with(&all, needle);
     }
 }
 
 #[test]
 fn bad_input_gives_one_line_and_failure() {
-    let check = |args: &[&str], needle: &str| {
-        let out = procfit(args);
-        let err = String::from_utf8_lossy(&out.stderr).to_string();
-        assert!(!out.status.success(), "{args:?} should fail");
-        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
-        assert!(err.contains(needle), "{args:?}: `{err}` lacks `{needle}`");
-    };
+    let check = fails_with;
     let empty = scratch("empty.png");
     write_png(&empty, 64, 64, |_, _| 0);
     let full = scratch("full.png");

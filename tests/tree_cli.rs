@@ -5,25 +5,13 @@ use procfit::generators::tree::{TreeGenerator, idx};
 use procfit::generators::{Generator, Lod, Mesh};
 use procfit::tree::impostor::{TreeImpostor, tree_view};
 use procfit::tree::{BRANCH, LEAF};
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod cli_support;
 
-fn procfit(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_procfit"))
-        .args(args)
-        .output()
-        .expect("runs")
-}
+use cli_support::{fails_with, run_ok, s};
+use std::path::PathBuf;
 
 fn scratch(name: &str) -> PathBuf {
-    // Under target/tmp (cargo clean removes it), not the system temp dir.
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("tree-cli");
-    std::fs::create_dir_all(&dir).expect("dir");
-    dir.join(name)
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("utf-8 path")
+    cli_support::scratch("tree-cli", name)
 }
 
 const W: u32 = 120;
@@ -57,7 +45,7 @@ fn photo_to_glb_with_its_camera() {
     .save(&photo)
     .expect("png");
     let (glb, params) = (scratch("tree.glb"), scratch("tree.json"));
-    let out = procfit(&[
+    let (_, err) = run_ok(&[
         "reconstruct",
         "--generator",
         "tree",
@@ -71,8 +59,6 @@ fn photo_to_glb_with_its_camera() {
         "--params-out",
         s(&params),
     ]);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{err}");
     assert!(
         err.contains("tree stage 3/3") && err.contains("ETA") && err.contains("similarity"),
         "progress: {err}"
@@ -118,7 +104,7 @@ fn photo_to_glb_with_its_camera() {
 
     // Refit from the params written: the tree keeps its seed and never gets less similar.
     let refit = scratch("tree-refit.json");
-    let out = procfit(&[
+    let (said, _) = run_ok(&[
         "reconstruct",
         "--start",
         s(&params),
@@ -130,12 +116,6 @@ fn photo_to_glb_with_its_camera() {
         "--params-out",
         s(&refit),
     ]);
-    let said = String::from_utf8_lossy(&out.stdout).to_string();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let number = |after: &str| -> f64 {
         let i = said
             .find(after)
@@ -164,18 +144,18 @@ fn bad_tree_masks_give_one_line_and_failure() {
         image::GrayImage::from_fn(64, 64, |x, y| image::Luma([f(x, y)]))
             .save(&path)
             .expect("png");
-        let out = procfit(&[
-            "reconstruct",
-            "--generator",
-            "tree",
-            s(&path),
-            "-o",
-            s(&scratch("x.glb")),
-        ]);
-        let err = String::from_utf8_lossy(&out.stderr).to_string();
-        assert!(!out.status.success(), "{name} should fail");
-        assert_eq!(err.trim_end().lines().count(), 1, "{name}: {err}");
-        assert!(err.contains(needle), "{name}: `{err}` lacks `{needle}`");
+        let glb = scratch("x.glb");
+        fails_with(
+            &[
+                "reconstruct",
+                "--generator",
+                "tree",
+                s(&path),
+                "-o",
+                s(&glb),
+            ],
+            needle,
+        );
     };
     let blob = |x: u32, y: u32| x.abs_diff(32) < 12 && y.abs_diff(24) < 12;
     let trunk = |x: u32, y: u32| x.abs_diff(32) < 2 && y > 30 && y < 60;
@@ -190,16 +170,18 @@ fn bad_tree_masks_give_one_line_and_failure() {
         &|x, y| if trunk(x, y) { BRANCH } else { 0 },
         "no leaf",
     );
-    let two = procfit(&[
-        "reconstruct",
-        "--generator",
-        "tree",
-        "a.png",
-        "b.png",
-        "-o",
-        "x.glb",
-    ]);
-    assert!(String::from_utf8_lossy(&two.stderr).contains("one image"));
+    fails_with(
+        &[
+            "reconstruct",
+            "--generator",
+            "tree",
+            "a.png",
+            "b.png",
+            "-o",
+            "x.glb",
+        ],
+        "one image",
+    );
 }
 
 #[test]
@@ -219,32 +201,25 @@ fn tree_colors_label_an_autumn_photo() {
     })
     .save(&photo)
     .expect("png");
-    let run = |extra: &[&str]| {
-        let mut args = vec!["reconstruct", "--generator", "tree", "--budget", "200"];
-        args.extend_from_slice(extra);
-        let glb = scratch("autumn.glb");
-        args.extend_from_slice(&[s(&photo), "-o", s(&glb)]);
-        let out = procfit(&args);
-        (
-            out.status.success(),
-            String::from_utf8_lossy(&out.stderr).to_string(),
-        )
+    let glb = scratch("autumn.glb");
+    let (photo, glb) = (s(&photo), s(&glb));
+    let args = |extra: &[&'static str]| {
+        let mut a = vec!["reconstruct", "--generator", "tree", "--budget", "200"];
+        a.extend_from_slice(extra);
+        a.extend([photo, "-o", glb]);
+        a
     };
-    let (ok, err) = run(&[]);
-    assert!(!ok && err.contains("no leaf"), "default colours: {err}");
-    let (ok, err) = run(&[
+    // Default colours: no leaves.
+    fails_with(&args(&[]), "no leaf");
+    run_ok(&args(&[
         "--tree-colors",
         r#"{"leafHue":[330,170],"leafMinValue":0.45}"#,
-    ]);
-    assert!(ok, "autumn colours: {err}");
+    ]));
     for (bad, needle) in [
         (r#"{"leafHue":[0,400]}"#, "0–360"),
         (r#"{"leafHew":[1,2]}"#, "unknown field"),
         ("not json", "--tree-colors"),
     ] {
-        let (ok, err) = run(&["--tree-colors", bad]);
-        assert!(!ok, "{bad} should fail");
-        assert_eq!(err.trim_end().lines().count(), 1, "{bad}: {err}");
-        assert!(err.contains(needle), "{bad}: `{err}` lacks `{needle}`");
+        fails_with(&args(&["--tree-colors", bad]), needle);
     }
 }
