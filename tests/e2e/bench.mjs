@@ -13,6 +13,37 @@ const median = (xs) => {
   return s.length ? (s.length % 2 ? s[(s.length - 1) / 2] : (s[s.length / 2 - 1] + s[s.length / 2]) / 2) : NaN;
 };
 
+/** A bundled sample's entry in www/samples/index.json (its file, generator and truth). */
+async function sample(server, name) {
+  return JSON.parse(await (await fetch(`${server.url}www/samples/index.json`)).text()).samples.find((x) => x.name === name);
+}
+
+/**
+ * Runs the page's fit `runs` times on the loaded photo: wall time, the result line and the
+ * IoU-64 of the fitted model against the sample's `truth` (in the model frames: the fitted
+ * yaw is not aligned, so a turned handle counts against it — a lower bound).
+ */
+async function timedFits(page, truth, runs) {
+  const out = [];
+  for (let run = 0; run < runs; run += 1) {
+    await page.evaluate(() => delete document.body.dataset.fitted);
+    const t0 = Date.now();
+    await page.click('#fit-start');
+    await page.waitForFunction(() => document.body.dataset.fitted, null, { timeout: 600000 });
+    const seconds = (Date.now() - t0) / 1000;
+    const message = await page.textContent('#fit-message');
+    const { iou } = await page.evaluate(
+      (truth) => {
+        const { client, REQUESTS, editor } = window.procfit;
+        return client.call(REQUESTS.IOU64, { a: { generator: editor.spec.name, params: editor.base }, b: { generator: truth.generator, params: truth.truth.params }, lod: 1, side: 128 });
+      },
+      truth,
+    );
+    out.push({ seconds, iou, message });
+  }
+  return out;
+}
+
 const server = await startServer();
 const browser = await launchBrowser();
 try {
@@ -53,30 +84,13 @@ try {
     await page.close();
   }
   // The sample cup fit at Normal effort with the page's threads, and how close it came to the
-  // truth the sample was rendered from (IoU-64 in the model frames: the fitted yaw is not
-  // aligned, so a turned handle counts against it — a lower bound).
-  const fits = [];
+  // truth the sample was rendered from.
   const { page } = await openPage(browser.context, server.url);
   await page.waitForSelector('body[data-ready="true"]', { timeout: 120000 });
   const threads = await page.evaluate(() => window.procfit.client.info.threads);
-  const truth = JSON.parse(await (await fetch(`${server.url}www/samples/index.json`)).text()).samples.find((x) => x.name === 'mug');
   await page.click('button[data-sample="mug"]');
   await page.waitForFunction(() => /Object found|check the mask/.test(document.getElementById('mask-state').textContent), null, { timeout: 60000 });
-  for (let run = 0; run < 3; run += 1) {
-    await page.evaluate(() => delete document.body.dataset.fitted);
-    const t0 = Date.now();
-    await page.click('#fit-start');
-    await page.waitForFunction(() => document.body.dataset.fitted, null, { timeout: 600000 });
-    const seconds = (Date.now() - t0) / 1000;
-    const { iou } = await page.evaluate(
-      (truth) => {
-        const { client, REQUESTS, editor } = window.procfit;
-        return client.call(REQUESTS.IOU64, { a: { generator: editor.spec.name, params: editor.base }, b: { generator: truth.generator, params: truth.truth.params }, lod: 1, side: 128 });
-      },
-      truth,
-    );
-    fits.push({ seconds, iou });
-  }
+  const fits = await timedFits(page, await sample(server, 'mug'), 3);
   // Responsiveness while a fit runs: slider moves during a Thorough fit (the worker yields
   // between slices, so a regeneration waits at most one slice).
   await page.selectOption('#fit-quality', '3');
@@ -102,36 +116,21 @@ try {
   // and its IoU-64 against the tree the sample was rendered from (the paper's metric: each
   // model normalised to its bounding box; the fitted seed shuffles branches, so ~0.6–0.8 is
   // the ceiling, see `cargo bench --bench tree`).
-  const trees = [];
+  let trees;
   {
     // A fresh profile: the pages above saved their session, which this one would restore.
     const fresh = await launchBrowser();
     const { page } = await openPage(fresh.context, server.url);
     await page.waitForSelector('body[data-ready="true"]', { timeout: 120000 });
-    const oak = JSON.parse(await (await fetch(`${server.url}www/samples/index.json`)).text()).samples.find((x) => x.name === 'oak');
     await page.click('button[data-sample="oak"]');
     await page.waitForFunction(() => /What the tree fit sees/.test(document.getElementById('tree-state').textContent), null, { timeout: 60000 });
     await page.selectOption('#fit-quality', '1');
-    for (let run = 0; run < 2; run += 1) {
-      await page.evaluate(() => delete document.body.dataset.fitted);
-      const t0 = Date.now();
-      await page.click('#fit-start');
-      await page.waitForFunction(() => document.body.dataset.fitted, null, { timeout: 600000 });
-      const seconds = (Date.now() - t0) / 1000;
-      const message = await page.textContent('#fit-message');
-      const { iou } = await page.evaluate(
-        (truth) => {
-          const { client, REQUESTS, editor } = window.procfit;
-          return client.call(REQUESTS.IOU64, { a: { generator: editor.spec.name, params: editor.base }, b: { generator: truth.generator, params: truth.truth.params }, lod: 1, side: 128 });
-        },
-        oak,
-      );
-      trees.push({ seconds, iou, evaluations: (message.match(/\(([\d,]+) evaluations/) || [])[1] });
-    }
+    trees = await timedFits(page, await sample(server, 'oak'), 2);
     await page.close();
     await fresh.close();
   }
-  console.log(`\nOak sample tree fit (Normal effort, ${threads} threads), 2 runs: median ${median(trees.map((f) => f.seconds)).toFixed(1)} s, IoU-64 vs truth ${trees.map((f) => f.iou.toFixed(3)).join(', ')} (${trees[0].evaluations} evaluations; target ≤ 120 s)`);
+  const evaluations = (trees[0].message.match(/\(([\d,]+) evaluations/) || [])[1];
+  console.log(`\nOak sample tree fit (Normal effort, ${threads} threads), 2 runs: median ${median(trees.map((f) => f.seconds)).toFixed(1)} s, IoU-64 vs truth ${trees.map((f) => f.iou.toFixed(3)).join(', ')} (${evaluations} evaluations; target ≤ 120 s)`);
   console.log(`\nSlider → new frame during a running fit (MEDIUM, ${during.length} moves): median ${median(during).toFixed(1)} ms, max ${Math.max(...during).toFixed(1)} ms`);
   console.log(`\nSample cup fit (Normal effort, ${threads} threads), 3 runs: median ${median(fits.map((f) => f.seconds)).toFixed(1)} s, IoU-64 vs truth median ${median(fits.map((f) => f.iou)).toFixed(3)} (runs: ${fits.map((f) => `${f.seconds.toFixed(1)} s / ${f.iou.toFixed(3)}`).join(', ')})`);
   console.log(`\nTime to interactive (navigation → first model frame), median of ${ttis.length}: ${median(ttis).toFixed(0)} ms\n`);
