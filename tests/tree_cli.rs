@@ -71,19 +71,7 @@ fn photo_to_glb_with_its_camera() {
     let cam = &model.cameras[0];
     assert!((cam.aspect - W as f32 / H as f32).abs() < 1e-6);
     // The camera re-projects the fitted tree onto the photo's tree.
-    let mat = glam::Mat4::from_cols_array(&cam.camera_to_world).as_dmat4();
-    let view = procfit::camera::View {
-        width: W,
-        height: H,
-        pose: procfit::camera::CameraPose {
-            rotation: glam::DMat3::from_mat4(mat),
-            position: mat.w_axis.truncate(),
-        },
-        params: procfit::camera::ViewParams {
-            fov_y: f64::from(cam.yfov),
-            ..Default::default()
-        },
-    };
+    let view = procfit::reconstruct::camera_view(cam, W, H);
     let mesh = Mesh {
         positions: model.reference.positions.clone(),
         triangles: model.reference.triangles.clone(),

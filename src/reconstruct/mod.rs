@@ -61,3 +61,22 @@ pub fn export_camera(view: &crate::camera::View, name: Option<String>) -> Export
         camera_to_world: m.as_mat4().to_cols_array(),
     }
 }
+
+/// The view of a glTF camera ([`export_camera`]'s output, or any GLB's) over a `width × height`
+/// image: its pose in the model's frame and its vertical field of view, the object left where
+/// it is (no object transform).
+pub fn camera_view(cam: &ExportCamera, width: u32, height: u32) -> crate::camera::View {
+    let mat = glam::Mat4::from_cols_array(&cam.camera_to_world).as_dmat4();
+    crate::camera::View {
+        width,
+        height,
+        pose: crate::camera::CameraPose {
+            rotation: glam::DMat3::from_mat4(mat),
+            position: mat.w_axis.truncate(),
+        },
+        params: crate::camera::ViewParams {
+            fov_y: f64::from(cam.yfov),
+            ..Default::default()
+        },
+    }
+}
