@@ -224,28 +224,20 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
     };
     let mut session = Session::new(config, masks).map_err(|e| e.to_string())?;
     let start = Instant::now();
-    let mut last_draw = 0.0f64;
-    let mut stderr = std::io::stderr();
-    loop {
+    step_with_progress(|| {
         let p = session.step();
-        let t = start.elapsed().as_secs_f64();
-        if p.done || t - last_draw > 0.2 {
-            last_draw = t;
-            let frac = if p.work_total > 0.0 {
+        Tick {
+            done: p.done,
+            name: format!("{} ×{}", p.generator, p.runs),
+            stage: p.stage,
+            frac: if p.work_total > 0.0 {
                 p.work_done / p.work_total
             } else {
                 0.0
-            };
-            let name = format!("{} ×{}", p.generator, p.runs);
-            let rest = format!("{} evals, loss {:.5}", p.evaluations, p.best_loss);
-            let _ = write!(stderr, "{}", progress_bar(&name, p.stage, frac, t, &rest));
-            let _ = stderr.flush();
+            },
+            rest: format!("{} evals, loss {:.5}", p.evaluations, p.best_loss),
         }
-        if p.done {
-            break;
-        }
-    }
-    let _ = writeln!(stderr);
+    });
     let result = session.result().map_err(|e| e.to_string())?;
     let model = Model {
         lod: Lod::High,
@@ -271,6 +263,37 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
         result.loss
     );
     Ok(())
+}
+
+/// Where a fit stands after one step, for its progress line.
+struct Tick {
+    done: bool,
+    name: String,
+    stage: u8,
+    frac: f64,
+    rest: String,
+}
+
+/// Steps a fit to its end with `step`, redrawing its progress line ([`progress_bar`]) on
+/// stderr at the first step, every 0.2 s after and at the end.
+fn step_with_progress(mut step: impl FnMut() -> Tick) {
+    let start = Instant::now();
+    let mut last_draw = -1.0f64;
+    let mut stderr = std::io::stderr();
+    loop {
+        let p = step();
+        let t = start.elapsed().as_secs_f64();
+        if p.done || t - last_draw > 0.2 {
+            last_draw = t;
+            let line = progress_bar(&p.name, p.stage, p.frac, t, &p.rest);
+            let _ = write!(stderr, "{line}");
+            let _ = stderr.flush();
+        }
+        if p.done {
+            break;
+        }
+    }
+    let _ = writeln!(stderr);
 }
 
 /// The progress line of a fit: `name stage s/3 [####....] pct …, ETA`.
@@ -336,26 +359,19 @@ fn reconstruct_tree(a: &ReconstructArgs, from: Option<&[f64]>) -> Result<(), Str
     } = procfit::tree::impostor::start_photo_fit(&labels, a.seed, a.budget, from)
         .map_err(|e| format!("{}: {e}", image.display()))?;
     let start = Instant::now();
-    let mut last_draw = -1.0f64;
-    let mut stderr = std::io::stderr();
-    loop {
+    step_with_progress(|| {
         let p = session.step();
-        let t = start.elapsed().as_secs_f64();
-        if p.done || t - last_draw > 0.2 {
-            last_draw = t;
-            let frac = p.evaluations as f64 / p.total_evaluations.max(1) as f64;
-            let rest = format!(
+        Tick {
+            done: p.done,
+            name: "tree".into(),
+            stage: p.stage,
+            frac: p.evaluations as f64 / p.total_evaluations.max(1) as f64,
+            rest: format!(
                 "{} evals, similarity {:.3}",
                 p.evaluations, p.best_similarity
-            );
-            let _ = write!(stderr, "{}", progress_bar("tree", p.stage, frac, t, &rest));
-            let _ = stderr.flush();
+            ),
         }
-        if p.done {
-            break;
-        }
-    }
-    let _ = writeln!(stderr);
+    });
     let fit = session.result().map_err(|e| e.to_string())?;
     let mut model = Model::new("tree", &fit.params, Lod::High).map_err(|e| e.to_string())?;
     model.seed = Some(a.seed);
@@ -503,19 +519,7 @@ pub fn eval(a: &EvalArgs) -> Result<(), String> {
             .cameras
             .first()
             .ok_or_else(|| format!("{}: the model has no camera", a.model.display()))?;
-        let mat = glam::Mat4::from_cols_array(&cam.camera_to_world).as_dmat4();
-        let view = procfit::camera::View {
-            width: mask.width(),
-            height: mask.height(),
-            pose: procfit::camera::CameraPose {
-                rotation: glam::DMat3::from_mat4(mat),
-                position: mat.w_axis.truncate(),
-            },
-            params: procfit::camera::ViewParams {
-                fov_y: f64::from(cam.yfov),
-                ..Default::default()
-            },
-        };
+        let view = reconstruct::camera_view(cam, mask.width(), mask.height());
         let mesh = Mesh {
             positions: m.positions.clone(),
             triangles: m.triangles.clone(),
