@@ -105,7 +105,7 @@ export class FitRunner extends EventTarget {
     try {
       const out = await this.client.call(
         REQUESTS.TREE_RUN,
-        { fitId, seed: 1, quality, width, height, rgba, codes, colors: treeColors(photo), ...(start ? { start } : {}) },
+        { fitId, seed: 1, quality, width, height, rgba, codes, colors: treeColors(this.client, photo), ...(start ? { start } : {}) },
         {
           transfer: [rgba, codes],
           onEvent: (event, data) => {

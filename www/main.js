@@ -9,7 +9,7 @@ import * as store from './store.js';
 import { CameraCapture } from './camera.js';
 import { Viewer } from './viewer.js';
 import { Editor, LODS } from './editor.js';
-import { MaskEditor, autoMask, reviveMask, detectWindows, windowsAfterMask, treeLabels, treeColors, TREE_COLORS, AUTUMN_COLORS, WINDOW } from './masking.js';
+import { MaskEditor, autoMask, reviveMask, detectWindows, windowsAfterMask, treeLabels, treeColors, AUTUMN_CHANGE, WINDOW } from './masking.js';
 import { FitRunner } from './fitting.js';
 
 const $ = (id) => document.getElementById(id);
@@ -263,7 +263,7 @@ function renderTreeLabels() {
   if (line.hidden) return;
   showTreeColors(photo);
   const labels = photo.treeLabels;
-  const colorsKey = JSON.stringify(treeColors(photo));
+  const colorsKey = JSON.stringify(treeColors(client, photo));
   // Made again when the mask or the colours change (an error counts as an answer too).
   if (photo.treeLabelsFor !== photo.mask.codes || photo.treeLabelsColors !== colorsKey) {
     line.textContent = 'Sorting branches from leaves…';
@@ -307,7 +307,7 @@ function renderTreeLabels() {
 
 /** The "Adjust the colours" controls show `photo`'s colour rules. */
 function showTreeColors(photo) {
-  const c = treeColors(photo);
+  const c = treeColors(client, photo);
   const set = (id, v, text) => {
     $(id).value = String(v);
     $(`${id}-out`).textContent = text;
@@ -333,7 +333,7 @@ function showTreeColors(photo) {
 function changeTreeColors(change) {
   const photo = state.photos.find((p) => p.id === state.selected);
   if (!photo) return;
-  photo.treeColors = change === null ? null : { ...treeColors(photo), ...change };
+  photo.treeColors = change === null ? null : { ...treeColors(client, photo), ...change };
   renderTreeLabels();
   persist();
 }
@@ -343,9 +343,9 @@ for (const [id, field] of [['leaf-min-value', 'leafMinValue'], ['leaf-min-satura
 }
 $('leaf-hue-from').addEventListener('input', (e) => changeTreeColors({ leafHue: [Number(e.target.value), Number($('leaf-hue-to').value)] }));
 $('leaf-hue-to').addEventListener('input', (e) => changeTreeColors({ leafHue: [Number($('leaf-hue-from').value), Number(e.target.value)] }));
-$('bark-max-value').addEventListener('input', (e) => changeTreeColors({ barkValue: [TREE_COLORS.barkValue[0], Number(e.target.value)] }));
+$('bark-max-value').addEventListener('input', (e) => changeTreeColors({ barkValue: [client.info.treeColors.barkValue[0], Number(e.target.value)] }));
 $('rest-as-branch').addEventListener('change', (e) => changeTreeColors({ restAsBranch: e.target.checked }));
-$('colors-autumn').addEventListener('click', () => changeTreeColors({ ...AUTUMN_COLORS }));
+$('colors-autumn').addEventListener('click', () => changeTreeColors({ ...client.info.treeColors, ...AUTUMN_CHANGE }));
 $('colors-reset').addEventListener('click', () => changeTreeColors(null));
 
 function renderMaskState() {

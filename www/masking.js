@@ -76,16 +76,16 @@ export function photoPixels(photo) {
 }
 
 /**
- * The colour rules that sort a tree photo's pixels into leaves and branches (the fields of the
- * core's ColorThresholds; hues in degrees, a range starting above its end wraps through red).
+ * Changed from the defaults, the colour rules for orange, red and yellow leaves as well as
+ * green; dark bark stays bark. The rules sort a tree photo's pixels into leaves and branches:
+ * the fields of the core's ColorThresholds (hues in degrees, a range starting above its end
+ * wraps through red); the defaults come from the worker (`client.info.treeColors`).
  */
-export const TREE_COLORS = Object.freeze({ leafHue: [60, 170], leafMinSaturation: 0.18, leafMinValue: 0.08, barkValue: [0.08, 0.6], restAsBranch: false });
-/** Orange, red and yellow leaves as well as green; dark bark stays bark. */
-export const AUTUMN_COLORS = Object.freeze({ ...TREE_COLORS, leafHue: [330, 170], leafMinValue: 0.45 });
+export const AUTUMN_CHANGE = Object.freeze({ leafHue: [330, 170], leafMinValue: 0.45 });
 
-/** `photo`'s colour rules (its own, or the defaults). */
-export function treeColors(photo) {
-  return { ...TREE_COLORS, ...(photo.treeColors ?? {}) };
+/** `photo`'s colour rules: its own, or the core's defaults that `client` reported. */
+export function treeColors(client, photo) {
+  return { ...client.info.treeColors, ...(photo.treeColors ?? {}) };
 }
 
 /** Asks the worker for `photo`'s tree labels (branch / leaf by colour, inside the mask). */
@@ -93,7 +93,7 @@ export async function treeLabels(client, photo) {
   const rgba = photoPixels(photo);
   const codes = fitCodes(photo).buffer;
   const { width, height } = photo.mask;
-  const colors = treeColors(photo);
+  const colors = treeColors(client, photo);
   const t = await client.call(REQUESTS.TREE_LABELS, { width, height, rgba, codes, colors }, { transfer: [rgba, codes] });
   photo.treeLabels = new Uint8Array(t.labels);
   return photo.treeLabels;

@@ -14,6 +14,8 @@ const handlers = {
     version: wasm.version(),
     threads: wasm.threaded() ? navigator.hardwareConcurrency : 1,
     threaded: wasm.threaded(),
+    // The tree colour rules the page starts from (the core's ColorThresholds::default()).
+    treeColors: wasm.treeColorDefaults(),
   }),
   [REQUESTS.THREAD_PROBE]: ({ jobs = 64 } = {}) => ({ threads: wasm.threadProbe(jobs) }),
   [REQUESTS.DEBUG_PANIC]: () => wasm.debugPanic(),

@@ -119,6 +119,13 @@ pub fn tree_labels(
         .to_vec())
 }
 
+/// The default colour rules ([`ColorThresholds::default`]) as a JS object of camelCase fields:
+/// what the page's "Adjust the colours" shows before any change.
+#[wasm_bindgen(js_name = treeColorDefaults)]
+pub fn tree_color_defaults() -> Result<JsValue, JsError> {
+    serde_wasm_bindgen::to_value(&ColorThresholds::default()).map_err(js)
+}
+
 /// The colour rules from JS: undefined or null for the defaults, else an object of
 /// [`ColorThresholds`]' camelCase fields (checked; unknown fields refused).
 fn colors_of(colors: JsValue) -> Result<ColorThresholds, JsError> {
