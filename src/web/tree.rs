@@ -16,6 +16,7 @@
 //! // a photo under other colour rules: `colors` is an object of `ColorThresholds`' camelCase
 //! // fields (any left out keep their defaults: `{ leafHue: [330, 170], restAsBranch: true }`)
 //! // or undefined for the defaults.
+//! const defaults = treeColorDefaults(); // ColorThresholds::default() as such an object
 //! const labels = treeLabels(width, height, rgba, codes, colors); // also what the page shows
 //! const fit = TreeFitSession.fromLabels(width, height, labels, seed, budget, start);
 //! // Both throw an Error with a sentence for a mask with no tree, no leaves or no branches,
