@@ -333,6 +333,9 @@ pub fn tree_stat_samples(
     use crate::tree::impostor::{TreeImpostor, tree_view};
     use crate::tree::similarity::{SimilarityConfig, TreeReference, TreeTraits};
     use std::sync::Mutex;
+    if samples == 0 {
+        return Err(TreeError("statistics need at least one sample".into()));
+    }
     let g = &treegen::TreeGenerator;
     let spec = g.params();
     let view = tree_view(side, side, 12.0)?;
@@ -348,7 +351,7 @@ pub fn tree_stat_samples(
             refs.push(r);
         }
     }
-    if refs.is_empty() || samples == 0 {
+    if refs.is_empty() {
         return Err(TreeError("no preset makes a usable reference".into()));
     }
     let slots = rayon::current_num_threads() + 1;
