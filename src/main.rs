@@ -9,6 +9,7 @@ use procfit::model::Model;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+mod outputs;
 mod recon_cli;
 
 #[derive(Parser)]
@@ -174,6 +175,11 @@ fn generate(
     seed: Option<u64>,
     output: &Path,
 ) -> Result<(), String> {
+    let mut plan = outputs::Outputs::new().output("-o", output);
+    if let Some(p) = params {
+        plan = plan.input(p);
+    }
+    plan.check()?;
     let g = procfit::generators::by_name(generator)
         .ok_or_else(|| format!("unknown generator `{generator}` (see `procfit generators`)"))?;
     let mut model = match (preset, params) {
@@ -223,7 +229,7 @@ fn generate(
         .map_err(|e| e.to_string())?;
     let glb =
         procfit::glb::write_glb(&mesh, Some(&model.to_doc()), &[]).map_err(|e| e.to_string())?;
-    std::fs::write(output, &glb).map_err(|e| format!("cannot write {}: {e}", output.display()))?;
+    outputs::write_atomic(output, &glb)?;
     println!(
         "wrote {}: {}{} lod {}, {} triangles in {} parts, {} bytes",
         output.display(),
@@ -238,6 +244,9 @@ fn generate(
 }
 
 fn tree_stats(out: Option<&std::path::Path>) -> Result<(), String> {
+    if let Some(path) = out {
+        outputs::Outputs::new().output("--out", path).check()?;
+    }
     let stats = procfit::tree::mutation::tree_stats().map_err(|e| e.to_string())?;
     let text = stats.to_json() + "\n";
     write_or_print(out, &text)
@@ -253,6 +262,12 @@ fn tree_fit(
     out: Option<&std::path::Path>,
 ) -> Result<(), String> {
     use procfit::tree::{impostor, labels, mutation::MutationStats, similarity::TreeTraits};
+    if let Some(path) = out {
+        outputs::Outputs::new()
+            .input(input)
+            .output("--out", path)
+            .check()?;
+    }
     let img = image::open(input).map_err(|e| format!("cannot read {}: {e}", input.display()))?;
     let (w, h) = (img.width(), img.height());
     let label_image = if is_labels {
@@ -293,9 +308,7 @@ fn tree_fit(
 /// Writes `text` to `out`, or to stdout when no path is given.
 fn write_or_print(out: Option<&std::path::Path>, text: &str) -> Result<(), String> {
     match out {
-        Some(path) => {
-            std::fs::write(path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))
-        }
+        Some(path) => outputs::write_atomic(path, text.as_bytes()),
         None => {
             print!("{text}");
             Ok(())

@@ -1,6 +1,7 @@
 //! The CLI's reconstruction subcommands: `reconstruct`, `render` and `eval` (kept apart from
 //! `main.rs` so the subcommands of other rooms merge cleanly). Every error is one line.
 
+use crate::outputs::{Outputs, write_atomic};
 use clap::Args;
 use procfit::generators::{self, Lod, Mesh};
 use procfit::glb::{self, ExportCamera};
@@ -183,6 +184,15 @@ fn seconds(s: f64) -> String {
 
 /// `procfit reconstruct`: fit, progress on stderr, GLB (and params JSON) out.
 pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
+    // Every output is checked before any work: a bad path fails now, not after the fit.
+    let mut plan = Outputs::new().inputs(&a.images).output("-o", &a.output);
+    if let Some(p) = &a.start {
+        plan = plan.input(p);
+    }
+    if let Some(p) = &a.params_out {
+        plan = plan.output("--params-out", p);
+    }
+    plan.check()?;
     let start = a.start.as_deref().map(load_start).transpose()?;
     let generator = match &start {
         Some(m) if a.generator == "auto" || a.generator == m.generator.name() => {
@@ -400,11 +410,9 @@ fn write_outputs(
     cameras: &[procfit::glb::ExportCamera],
 ) -> Result<(), String> {
     let glb = glb::export_model(model, cameras).map_err(|e| e.to_string())?;
-    std::fs::write(&a.output, &glb)
-        .map_err(|e| format!("cannot write {}: {e}", a.output.display()))?;
+    write_atomic(&a.output, &glb)?;
     if let Some(path) = &a.params_out {
-        std::fs::write(path, model.to_json())
-            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+        write_atomic(path, model.to_json().as_bytes())?;
     }
     Ok(())
 }
@@ -455,6 +463,13 @@ fn model_from(
 
 /// `procfit render`: a silhouette PNG (white object on black).
 pub fn render(a: &RenderArgs) -> Result<(), String> {
+    let mut plan = Outputs::new().input(&a.camera).output("-o", &a.output);
+    if let Some(p) = &a.params {
+        plan = plan.input(p);
+    }
+    plan.check()?;
+    let format = image::ImageFormat::from_path(&a.output)
+        .map_err(|_| format!("-o {}: name it .png", a.output.display()))?;
     let model = model_from(&a.generator, a.preset.as_deref(), a.params.as_deref())?;
     let text = std::fs::read_to_string(&a.camera)
         .map_err(|e| format!("cannot read {}: {e}", a.camera.display()))?;
@@ -475,8 +490,10 @@ pub fn render(a: &RenderArgs) -> Result<(), String> {
         .map(|&c| (c * 255.0).round() as u8)
         .collect();
     let img = image::GrayImage::from_raw(w, h, luma).ok_or("internal: image size mismatch")?;
-    img.save(&a.output)
-        .map_err(|e| format!("cannot write {}: {e}", a.output.display()))?;
+    let mut png = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut png, format)
+        .map_err(|e| format!("cannot encode {}: {e}", a.output.display()))?;
+    write_atomic(&a.output, png.get_ref())?;
     println!("wrote {}: {w}×{h}", a.output.display());
     Ok(())
 }

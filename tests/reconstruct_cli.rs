@@ -193,9 +193,86 @@ fn bad_input_gives_one_line_and_failure() {
             "--size",
             "0",
             "-o",
-            s(&out),
+            s(&scratch("out.png")),
         ],
         "camera JSON",
     );
     check(&["eval", "--reference", s(&text), s(&out)], "");
+}
+
+/// Issue 19: `reconstruct copy.jpg -o copy.jpg` exited 0 and turned the photo into a GLB.
+#[test]
+fn an_output_that_is_an_input_is_refused_before_any_work() {
+    let photo = scratch("copy.jpg");
+    std::fs::copy("www/samples/mug.jpg", &photo).unwrap();
+    let before = std::fs::read(&photo).unwrap();
+    fails_with(
+        &["reconstruct", s(&photo), "-o", s(&photo)],
+        "is an input of this command",
+    );
+    // The same file by another spelling of its path.
+    let dotted = photo.parent().unwrap().join(".").join("copy.jpg");
+    fails_with(
+        &[
+            "reconstruct",
+            s(&photo),
+            "-o",
+            "x.glb",
+            "--params-out",
+            s(&dotted),
+        ],
+        "is an input of this command",
+    );
+    assert_eq!(
+        std::fs::read(&photo).unwrap(),
+        before,
+        "the photo is untouched"
+    );
+}
+
+/// Issue 19: `-o x.glb --params-out x.glb` said it wrote the GLB and left JSON in its place.
+#[test]
+fn two_outputs_on_one_path_are_refused() {
+    let glb = scratch("twice.glb");
+    fails_with(
+        &[
+            "reconstruct",
+            "www/samples/mug.jpg",
+            "-o",
+            s(&glb),
+            "--params-out",
+            s(&glb),
+        ],
+        "-o and --params-out are the same file",
+    );
+    assert!(!glb.exists());
+}
+
+/// Issue 19: a missing output folder failed only after 12 s of fitting; now at once (the
+/// budget here would take minutes if the fit ran).
+#[test]
+fn a_missing_output_folder_fails_before_the_fit() {
+    let t = std::time::Instant::now();
+    fails_with(
+        &[
+            "reconstruct",
+            "www/samples/mug.jpg",
+            "--budget",
+            "1000000",
+            "-o",
+            "no-such-folder/x.glb",
+        ],
+        "does not exist",
+    );
+    fails_with(
+        &[
+            "generate",
+            "--generator",
+            "dish",
+            "-o",
+            "no-such-folder/x.glb",
+        ],
+        "does not exist",
+    );
+    assert!(t.elapsed().as_secs() < 30, "the fit did not start");
 }
