@@ -276,7 +276,7 @@ fn session_reports_progress_and_can_stop_early() {
         assert_eq!(p.params.len(), 53);
         assert_eq!(p.cameras.len(), 1);
         // The preview is the best silhouette at ≤ 128 a side, in the mask's aspect.
-        let preview = p.preview.expect("a preview");
+        let preview = s.preview().expect("a preview");
         assert_eq!((preview.width(), preview.height()), (128, 128));
         assert!(preview.area() > 100.0);
     }

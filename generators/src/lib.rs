@@ -97,6 +97,18 @@ pub struct ParamSpec {
     pub kind: ParamKind,
 }
 
+/// The unit symbol of a length ([`ParamSpec::unit`]): scaling the whole model multiplies every
+/// parameter in it.
+pub const LENGTH_UNIT: &str = "m";
+
+impl ParamSpec {
+    /// Whether the parameter is a continuous length (unit [`LENGTH_UNIT`]): scaling the whole
+    /// model by g multiplies it by g, and leaves counts, ratios and angles alone.
+    pub fn is_length(&self) -> bool {
+        self.kind.is_continuous() && self.unit == LENGTH_UNIT
+    }
+}
+
 /// A named parameter vector that looks like a real object.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Preset {

@@ -13,7 +13,7 @@
 //! parallel render) finds the slot busy and allocates its own. Edge structures ([`Topology`]) depend only on the discrete parameters
 //! and the level of detail, so they are cached per combination, shared between threads.
 
-use super::views::ViewVars;
+use super::views::{ViewSlot, ViewVars};
 use super::windows::WindowTerm;
 use crate::camera::{N_VIEW_PARAMS, View};
 use crate::generators::{Generator, Lod, Mesh};
@@ -42,7 +42,7 @@ pub struct Layout {
 impl Layout {
     /// Values per view.
     pub fn per_view(&self) -> usize {
-        if self.fit_fov { 7 } else { 6 }
+        ViewSlot::count(self.fit_fov)
     }
 
     /// Length of the optimisation vector.
@@ -58,6 +58,11 @@ impl Layout {
     /// Index of view `v`'s first value.
     pub fn view_offset(&self, v: usize) -> usize {
         self.n_gen + v * self.per_view()
+    }
+
+    /// Index of view `v`'s value `slot` (the field of view only when it is fitted).
+    pub fn slot(&self, v: usize, slot: ViewSlot) -> usize {
+        self.view_offset(v) + slot.index()
     }
 
     /// View `v`'s values in `x`.
@@ -297,20 +302,7 @@ impl FitObjective {
                             &mut gv,
                         )
                         .map_err(|e| e.to_string())?;
-                    // ViewParams order: yaw pitch roll tx ty tz scale fov pp_x pp_y.
-                    let o = layout.view_offset(v);
-                    let vars = layout.view_vars(x, v);
-                    let j = super::views::renderer_angles_jacobian(vars.yaw, vars.pitch, vars.roll);
-                    for m in 0..3 {
-                        g[o + m] = (0..3).map(|k| j[k][m] * gv[k]).sum();
-                    }
-                    g[o + 3] = gv[3];
-                    g[o + 4] = gv[4];
-                    // d/d ln s = s · d/ds.
-                    g[o + 5] = gv[6] * view.params.scale;
-                    if layout.fit_fov {
-                        g[o + 6] = gv[7];
-                    }
+                    pull_back_view(layout, x, v, &gv, view.params.scale, g);
                 }
             }
             if let (Some(g), Some(vjp)) = (grad.as_deref_mut(), vjp.as_ref()) {
@@ -356,6 +348,37 @@ impl Objective for FitObjective {
                 f64::INFINITY
             }
         }
+    }
+}
+
+/// Writes dL/d(view `v`'s values) into `grad` from the renderer's dL/d(view parameters) `gv`
+/// ([`ViewParams::NAMES`](crate::camera::ViewParams::NAMES) order) at point `x`, whose object
+/// scale is `scale`.
+fn pull_back_view(
+    layout: &Layout,
+    x: &[f64],
+    v: usize,
+    gv: &[f64; N_VIEW_PARAMS],
+    scale: f64,
+    grad: &mut [f64],
+) {
+    use crate::camera::ViewParams as P;
+    let vars = layout.view_vars(x, v);
+    let j = super::views::renderer_angles_jacobian(vars.yaw, vars.pitch, vars.roll);
+    // The renderer's angles are functions of all three of ours.
+    let renderer = [P::YAW, P::PITCH, P::ROLL];
+    for (m, slot) in [ViewSlot::Yaw, ViewSlot::Pitch, ViewSlot::Roll]
+        .into_iter()
+        .enumerate()
+    {
+        grad[layout.slot(v, slot)] = (0..3).map(|k| j[k][m] * gv[renderer[k]]).sum();
+    }
+    grad[layout.slot(v, ViewSlot::Tx)] = gv[P::TX];
+    grad[layout.slot(v, ViewSlot::Ty)] = gv[P::TY];
+    // d/d ln s = s · d/ds.
+    grad[layout.slot(v, ViewSlot::LogScale)] = gv[P::SCALE] * scale;
+    if layout.fit_fov {
+        grad[layout.slot(v, ViewSlot::FovY)] = gv[P::FOV_Y];
     }
 }
 
