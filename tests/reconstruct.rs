@@ -7,6 +7,11 @@
 //! because from one photo a handle turned towards the camera looks like a shorter handle seen
 //! side-on, a low bowl's height trades against the shape of its underside, and the
 //! bounding-box normalisation of IoU-64 magnifies both; four views ≥ 0.95 and no worse than one.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a test binary: a failed step should stop it loudly"
+)]
 
 mod reconstruct_support;
 

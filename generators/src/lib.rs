@@ -120,6 +120,26 @@ pub struct Preset {
     pub values: Vec<f64>,
 }
 
+impl Preset {
+    /// A preset that is every parameter's default in `specs` except `changes` (index, value).
+    pub fn from_defaults(
+        name: &'static str,
+        label: &'static str,
+        specs: &[ParamSpec],
+        changes: &[(usize, f64)],
+    ) -> Preset {
+        let mut values: Vec<f64> = specs.iter().map(|s| s.default).collect();
+        for &(i, v) in changes {
+            values[i] = v;
+        }
+        Preset {
+            name,
+            label,
+            values,
+        }
+    }
+}
+
 /// A named part of a mesh (body, handle, wall, window glass, trunk, leaf…).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Part {
