@@ -2,6 +2,11 @@
 //! mug (the measured, lathed one — not the generator's), a bowl (a non-preset dish) and a
 //! building (a non-preset one), each from one 512² mask, on 1 and 2 threads. Prints a markdown
 //! table of medians over several random cameras. Run with `cargo bench --bench reconstruct`.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a benchmark binary: a failed workload should stop it loudly"
+)]
 
 #[path = "../tests/reconstruct_support/mod.rs"]
 mod support;

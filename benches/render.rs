@@ -6,6 +6,11 @@
 //! Run: `cargo bench --bench render`. Paper Table 4, their renderer: 6.7 / 23.2 / 87.1 ms at
 //! 128² / 256² / 512² for ~3k vertices; targets here ≤ 1 / 3 / 10 ms single thread. The
 //! workload is `procfit::render::bench::BenchScene`, which the page can time in wasm.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a benchmark binary: a failed workload should stop it loudly"
+)]
 
 use procfit::render::bench::{BenchMesh, BenchScene};
 use std::time::Instant;

@@ -2,6 +2,11 @@
 //! interactive re-cut. Prints a markdown table of medians; run with
 //! `cargo bench --bench segment`. Targets (issue 5, for wasm): automatic ≤ 300 ms, re-cut
 //! ≤ 50 ms; these are native numbers.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a benchmark binary: a failed workload should stop it loudly"
+)]
 
 use std::time::Instant;
 

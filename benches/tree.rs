@@ -9,6 +9,11 @@
 //! skips Algorithm 3 for a fast look; `-- --mutation` adds the full comparison of Algorithm 3
 //! against Gaussian mutation (27 short fits per setting and 9 default fits per mutation, about
 //! ten minutes on 2 cores).
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a benchmark binary: a failed workload should stop it loudly"
+)]
 
 #[path = "../tests/tree_support/mod.rs"]
 mod tree_support;

@@ -134,6 +134,22 @@ impl ViewParams {
     pub const NAMES: [&'static str; N_VIEW_PARAMS] = [
         "yaw", "pitch", "roll", "tx", "ty", "tz", "scale", "fov_y", "pp_x", "pp_y",
     ];
+    /// Index of `yaw` in the flat vector (and in the renderer's view gradient).
+    pub const YAW: usize = 0;
+    /// Index of `pitch`.
+    pub const PITCH: usize = 1;
+    /// Index of `roll`.
+    pub const ROLL: usize = 2;
+    /// Index of the translation's x.
+    pub const TX: usize = 3;
+    /// Index of the translation's y.
+    pub const TY: usize = 4;
+    /// Index of the translation's z.
+    pub const TZ: usize = 5;
+    /// Index of `scale`.
+    pub const SCALE: usize = 6;
+    /// Index of `fov_y`.
+    pub const FOV_Y: usize = 7;
 
     /// The flat vector, in [`ViewParams::NAMES`] order.
     pub fn to_vec(&self) -> [f64; N_VIEW_PARAMS] {

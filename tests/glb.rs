@@ -1,6 +1,11 @@
 //! GLB export and import: structure of the written file, exact round trips of the generator
 //! state and geometry, vertex splitting, index widths, node transforms, OBJ, and clear errors on
 //! bad input.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a test binary: a failed step should stop it loudly"
+)]
 
 mod glb_support;
 

@@ -1,5 +1,10 @@
 //! `procfit generate`: the CLI writes a GLB that imports back to the requested model, and bad
 //! arguments end with a one-line message and a failure exit code.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a test binary: a failed step should stop it loudly"
+)]
 
 use procfit::generators::{self, Lod};
 use procfit::glb::import_glb;

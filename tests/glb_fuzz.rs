@@ -2,6 +2,11 @@
 //! flips, truncations, rewritten length fields, absurd numbers in the JSON, spliced bytes) must
 //! each give `Ok` or a clear `Err`, never a panic. The same mutations drive the `cargo fuzz`
 //! target in `fuzz/` without the seed limit.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a test binary: a failed step should stop it loudly"
+)]
 
 mod glb_support;
 

@@ -6,6 +6,11 @@
 //!
 //! Needs `node` and `npm ci` (for `node_modules/gltf-validator`). Where node is truly absent, set
 //! `PROCFIT_SKIP_NODE=1` to skip the validator run explicitly; otherwise a missing node fails.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a test binary: a failed step should stop it loudly"
+)]
 
 mod glb_support;
 

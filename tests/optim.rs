@@ -1,6 +1,11 @@
 //! Tests of the optimisers on analytic functions: Adam's documented step rules, convergence on
 //! Rosenbrock, the memetic algorithm on mixed discrete/continuous and multimodal problems, its
 //! budget, its determinism across thread counts and its refusal of bad set-ups.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a test binary: a failed step should stop it loudly"
+)]
 
 use procfit::optim::{
     Adam, AdamConfig, Domain, Memetic, MemeticConfig, Objective, Var, adam_search,

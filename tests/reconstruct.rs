@@ -7,6 +7,11 @@
 //! because from one photo a handle turned towards the camera looks like a shorter handle seen
 //! side-on, a low bowl's height trades against the shape of its underside, and the
 //! bounding-box normalisation of IoU-64 magnifies both; four views ≥ 0.95 and no worse than one.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a test binary: a failed step should stop it loudly"
+)]
 
 mod reconstruct_support;
 
@@ -276,7 +281,7 @@ fn session_reports_progress_and_can_stop_early() {
         assert_eq!(p.params.len(), 53);
         assert_eq!(p.cameras.len(), 1);
         // The preview is the best silhouette at ≤ 128 a side, in the mask's aspect.
-        let preview = p.preview.expect("a preview");
+        let preview = s.preview().expect("a preview");
         assert_eq!((preview.width(), preview.height()), (128, 128));
         assert!(preview.area() > 100.0);
     }

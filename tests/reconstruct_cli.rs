@@ -1,6 +1,11 @@
 //! The `reconstruct`, `render` and `eval` subcommands as a user runs them: `--help`, a
 //! render → reconstruct → eval round trip, and bad input ending in one line on stderr with a
 //! non-zero exit code.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a test binary: a failed step should stop it loudly"
+)]
 
 mod cli_support;
 

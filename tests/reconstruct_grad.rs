@@ -1,6 +1,11 @@
 //! The fit's objective against central finite differences: the camera values (through the
 //! elevation/spin → renderer-angle conversion and the log-scale) and a few generator
 //! parameters, on a small scene, plus the conventions of the camera helpers.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a test binary: a failed step should stop it loudly"
+)]
 
 mod reconstruct_support;
 

@@ -3,6 +3,11 @@
 //! 2.7 m; the window labels can. A building is rendered to a silhouette and window labels, and
 //! fitted from a start with the wrong floor count and window columns (and the same outline),
 //! with and without the window term.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a test binary: a failed step should stop it loudly"
+)]
 
 mod reconstruct_support;
 

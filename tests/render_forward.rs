@@ -1,5 +1,10 @@
 //! Forward-pass behaviour of the silhouette renderer: areas of known shapes, edge cancellation,
 //! occlusion in the backward pass, determinism with and without rayon, and bad input.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a test binary: a failed step should stop it loudly"
+)]
 
 use glam::{DVec3, Vec3};
 use procfit::camera::{N_VIEW_PARAMS, View};

@@ -6,6 +6,11 @@
 //! change). On failure `<name>.actual.png` and `<name>.diff.png` (|difference| × 4) are written
 //! next to the golden. `PROCFIT_BLESS=1 cargo test --test render_golden` rewrites the goldens
 //! (review them before committing).
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a test binary: a failed step should stop it loudly"
+)]
 
 use glam::{DVec3, Vec3};
 use procfit::camera::View;

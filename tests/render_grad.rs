@@ -12,6 +12,11 @@
 //! - **product**: the adjoint comes from the renderer's own tiny-skia coverage, as in a fit;
 //!   thresholds allow for tiny-skia's coverage error (about 1/16 per boundary pixel), which
 //!   matters most for parts about a pixel thin.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a test binary: a failed step should stop it loudly"
+)]
 
 use glam::{DVec3, Vec3};
 use procfit::camera::{N_VIEW_PARAMS, View, ViewParams};

@@ -1,6 +1,11 @@
 //! Recovering known quantities by gradient descent alone on the silhouette MSE (eq. 1): an
 //! object pose seen from three turntable views, and a sphere's radius through the vertex
 //! gradients (the chain rule of eq. 2 with d(position)/d(radius) = unit direction).
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a test binary: a failed step should stop it loudly"
+)]
 
 use glam::{DVec3, Vec3};
 use procfit::camera::{N_VIEW_PARAMS, View, ViewParams};

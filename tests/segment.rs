@@ -1,6 +1,11 @@
 //! Photo → mask end to end: synthetic photos with known truth (a shaded cup with a handle loop
 //! over plain, gradient, noisy and textured backgrounds, sensor noise, JPEG), EXIF orientation,
 //! interactive strokes, the other mask sources, windows and bad input.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a test binary: a failed step should stop it loudly"
+)]
 
 use image::codecs::jpeg::JpegEncoder;
 use image::codecs::png::PngEncoder;

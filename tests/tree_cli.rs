@@ -1,5 +1,10 @@
 //! `procfit reconstruct --generator tree` as a user runs it: a photo in, a GLB with the
 //! photo's camera and a params JSON out, progress on stderr; bad masks end in one line.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a test binary: a failed step should stop it loudly"
+)]
 
 use procfit::generators::tree::{TreeGenerator, idx};
 use procfit::generators::{Generator, Lod, Mesh};

@@ -2,6 +2,11 @@
 //! finds known optima, is deterministic for a seed on any number of threads, Algorithm 3
 //! mutation beats plain Gaussian mutation on the same budget, and the stored mutation
 //! statistics of the tree generator match what the generator gives today.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a test binary: a failed step should stop it loudly"
+)]
 
 use procfit::tree::ga::{GaConfig, Mutation, Rng, tree_ga};
 use procfit::tree::mutation::{MutationStats, random_genomes, tree_stats};

@@ -1,5 +1,10 @@
 //! Tree generator: every preset at every level of detail gives a valid, closed, outward-facing
 //! mesh with all three parts, the same mesh for the same parameters, and bad input is refused.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a test binary: a failed step should stop it loudly"
+)]
 
 use procfit::generators::tree::{self as tg, PART_BRANCH, PART_LEAF, PART_TRUNK, TreeGenerator};
 use procfit::generators::{GenError, Generator, Lod, Mesh, by_name};

@@ -1,6 +1,11 @@
 //! Tree impostors through the silhouette renderer, and the tree fit that uses them: label images
 //! hold both labels, similarity and IoU behave on rendered trees, the fit is consistent with
 //! its own report and deterministic on any number of threads, and bad input is refused.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a test binary: a failed step should stop it loudly"
+)]
 
 use procfit::generators::tree::{TreeGenerator, idx};
 use procfit::generators::{Generator, Lod};

@@ -7,6 +7,11 @@
 //! cores); measured: similarity 0.721 / 0.824 / 0.725, IoU-64 0.646 / 0.636 / 0.586 (before the
 //! leaf-cluster generator and the preset-seeded, fixed-seed fit: IoU-64 ≈ 0.21). The mutation
 //! comparison runs 18 small fits (about 1.5 minutes).
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a test binary: a failed step should stop it loudly"
+)]
 
 mod tree_support;
 

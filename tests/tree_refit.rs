@@ -2,6 +2,11 @@
 //! that tree's seed and never ends less similar than it — from the truth it keeps the truth,
 //! which a fit from scratch on the same budget does not find — and a start that is not a
 //! tree's parameters is refused, not a panic.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a test binary: a failed step should stop it loudly"
+)]
 
 use procfit::generators::tree::{TreeGenerator, idx};
 use procfit::generators::{Generator, Lod};

@@ -1,6 +1,11 @@
 //! Tree similarity (paper eq. 3) on synthetic label images: 1 for identical masks, symmetric,
 //! strictly lower and falling further as the reference is shifted, scaled or thinned; masks
 //! that cannot guide a fit are refused with a clear message.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a test binary: a failed step should stop it loudly"
+)]
 
 use procfit::mask::LabelImage;
 use procfit::tree::similarity::{SimilarityConfig, TreeReference, TreeTraits, compare, profile};

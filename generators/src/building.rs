@@ -1003,17 +1003,9 @@ impl Model for Building {
     }
 }
 
-/// A preset: the discrete layout and the continuous sizes, by name.
-fn preset(name: &'static str, label: &'static str, set: &[(usize, f64)]) -> Preset {
-    let mut values: Vec<f64> = SPEC.iter().map(|s| s.default).collect();
-    for &(i, v) in set {
-        values[i] = v;
-    }
-    Preset {
-        name,
-        label,
-        values,
-    }
+/// A preset: the defaults with `changes` (index, value), by name.
+fn preset(name: &'static str, label: &'static str, changes: &[(usize, f64)]) -> Preset {
+    Preset::from_defaults(name, label, &SPEC, changes)
 }
 
 impl Generator for Building {

@@ -97,6 +97,18 @@ pub struct ParamSpec {
     pub kind: ParamKind,
 }
 
+/// The unit symbol of a length ([`ParamSpec::unit`]): scaling the whole model multiplies every
+/// parameter in it.
+pub const LENGTH_UNIT: &str = "m";
+
+impl ParamSpec {
+    /// Whether the parameter is a continuous length (unit [`LENGTH_UNIT`]): scaling the whole
+    /// model by g multiplies it by g, and leaves counts, ratios and angles alone.
+    pub fn is_length(&self) -> bool {
+        self.kind.is_continuous() && self.unit == LENGTH_UNIT
+    }
+}
+
 /// A named parameter vector that looks like a real object.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Preset {
@@ -106,6 +118,26 @@ pub struct Preset {
     pub label: &'static str,
     /// One value per parameter, in spec order.
     pub values: Vec<f64>,
+}
+
+impl Preset {
+    /// A preset that is every parameter's default in `specs` except `changes` (index, value).
+    pub fn from_defaults(
+        name: &'static str,
+        label: &'static str,
+        specs: &[ParamSpec],
+        changes: &[(usize, f64)],
+    ) -> Preset {
+        let mut values: Vec<f64> = specs.iter().map(|s| s.default).collect();
+        for &(i, v) in changes {
+            values[i] = v;
+        }
+        Preset {
+            name,
+            label,
+            values,
+        }
+    }
 }
 
 /// A named part of a mesh (body, handle, wall, window glass, trunk, leaf…).

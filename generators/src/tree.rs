@@ -955,16 +955,9 @@ fn mesh_skeleton(sk: &Skeleton, lod: Lod) -> Mesh {
     mesh
 }
 
+/// A preset: the defaults with `changes` (index, value), by name.
 fn preset(name: &'static str, label: &'static str, changes: &[(usize, f64)]) -> Preset {
-    let mut values: Vec<f64> = PARAMS.iter().map(|p| p.default).collect();
-    for &(i, v) in changes {
-        values[i] = v;
-    }
-    Preset {
-        name,
-        label,
-        values,
-    }
+    Preset::from_defaults(name, label, &PARAMS, changes)
 }
 
 /// Level-block parameter index: `lv(level, k)` with `k` 0 branches, 1 length, 2 down angle,

@@ -1,5 +1,10 @@
 //! Contract tests over every registered generator: specs, presets and seeds are well formed,
 //! and the differentiable path builds exactly the mesh of the plain path.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a test binary: a failed step should stop it loudly"
+)]
 
 use procfit_generators::{Lod, all, by_name, sanitize_params};
 use std::collections::HashSet;

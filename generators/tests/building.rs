@@ -1,6 +1,11 @@
 //! Tests of the building generator: gradients against finite differences, mesh validity,
 //! golden summaries per preset × level of detail, random parameter vectors, symmetry, bad
 //! input.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a test binary: a failed step should stop it loudly"
+)]
 
 mod common;
 

@@ -1,5 +1,10 @@
 //! Tests of the dish generator: gradients against finite differences, mesh validity, golden
 //! summaries per preset × level of detail, random parameter vectors, bad input.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a test binary: a failed step should stop it loudly"
+)]
 
 mod common;
 

@@ -6,20 +6,29 @@
 //! - [`objective`]: eq. 1 (mean silhouette MSE over the views) and its gradient by eq. 2, as an
 //!   [`Objective`](crate::optim::Objective) for the optimisers.
 //! - [`session`]: the coarse-to-fine schedule (memetic at 128², Adam at 256² and 512²) as a
-//!   resumable [`Session`] for the page and the CLI.
-//! - [`windows`]: the window term of a building fit (window labels per view).
+//!   resumable [`Session`] for the page and the CLI: [`FitConfig::restarts`] runs stepped side
+//!   by side, the best kept. Its pieces: [`config`] (the settings, checked once), `run` (one
+//!   run's stage machine), `seeds` (stage 1's seed points), `handover` (stage 1 → 2).
+//! - [`windows`]: the window term of a building fit (window labels per view), and
+//!   `layout_search`, the building layout sweep it drives at the hand-over.
 //! - [`eval`]: the paper's IoU over 64 turntable views.
 
+pub mod config;
 pub mod eval;
+mod handover;
+mod layout_search;
 pub mod objective;
+mod run;
+mod seeds;
 pub mod session;
 pub mod views;
 pub mod windows;
 
+pub use config::{DEFAULT_EVALUATIONS, FitConfig, MAX_RESTARTS, MAX_VIEWS};
 pub use eval::{align_to_reference, iou64, normalized};
 pub use objective::{FitObjective, Layout, render_coverage, resample_mask};
-pub use session::{FitConfig, FitResult, Progress, Session};
-pub use views::{CAMERA_DISTANCE, DEFAULT_FOV_Y, ViewVars, fov_from_focal_35mm};
+pub use session::{FitResult, PREVIEW_SIDE, Progress, Session};
+pub use views::{CAMERA_DISTANCE, DEFAULT_FOV_Y, ViewSlot, ViewVars, fov_from_focal_35mm};
 pub use windows::{DEFAULT_WINDOW_WEIGHT, WindowTerm};
 
 use crate::glb::ExportCamera;

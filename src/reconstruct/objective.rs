@@ -6,21 +6,24 @@
 //! The optimisation vector is laid out by [`Layout`]: the generator's parameters in spec order,
 //! then each view's [`VIEW_VARS`](super::views::VIEW_VARS) (and its field of view when fitted).
 //!
-//! **Scratch buffers.** An evaluation needs a [`Renderer`] per image size, an adjoint image and
-//! a vertex-gradient buffer. Evaluations run on rayon's threads, so each thread keeps its own
-//! in a thread-local slot and reuses them on every call (the caller-allocates rule, with the
-//! thread as the caller). A nested evaluation on the same thread (rayon work stealing inside a
-//! parallel render) finds the slot busy and allocates its own. Edge structures ([`Topology`]) depend only on the discrete parameters
-//! and the level of detail, so they are cached per combination, shared between threads.
+//! Eq. 1 itself is [`MultiViewLoss`], the one implementation the benches and tests run too;
+//! this module adds the generator (eq. 2), the camera values and the regulariser.
+//!
+//! **Scratch buffers.** An evaluation needs a [`MultiViewLoss`] per image size (a renderer and
+//! an adjoint image), a vertex-gradient buffer and the view gradients. Evaluations run on
+//! rayon's threads, so each thread keeps its own in a thread-local slot and reuses them on every
+//! call (the caller-allocates rule, with the thread as the caller). A nested evaluation on the
+//! same thread (rayon work stealing inside a parallel render) finds the slot busy and allocates
+//! its own. Edge structures ([`Topology`]) depend only on the discrete parameters and the level
+//! of detail, so they are cached per combination, shared between threads.
 
-use super::views::ViewVars;
+use super::views::{ViewSlot, ViewVars};
 use super::windows::WindowTerm;
 use crate::camera::{N_VIEW_PARAMS, View};
 use crate::generators::{Generator, Lod, Mesh};
-use crate::loss;
 use crate::mask::Mask;
 use crate::optim::Objective;
-use crate::render::{Renderer, Topology};
+use crate::render::{MultiViewLoss, Renderer, Topology};
 use glam::Vec3;
 use std::cell::RefCell;
 use std::collections::HashMap;
@@ -42,7 +45,7 @@ pub struct Layout {
 impl Layout {
     /// Values per view.
     pub fn per_view(&self) -> usize {
-        if self.fit_fov { 7 } else { 6 }
+        ViewSlot::count(self.fit_fov)
     }
 
     /// Length of the optimisation vector.
@@ -60,6 +63,11 @@ impl Layout {
         self.n_gen + v * self.per_view()
     }
 
+    /// Index of view `v`'s value `slot` (the field of view only when it is fitted).
+    pub fn slot(&self, v: usize, slot: ViewSlot) -> usize {
+        self.view_offset(v) + slot.index()
+    }
+
     /// View `v`'s values in `x`.
     pub fn view_vars(&self, x: &[f64], v: usize) -> ViewVars {
         let o = self.view_offset(v);
@@ -73,43 +81,44 @@ impl Layout {
     }
 }
 
-/// Per-thread scratch: renderers by size, an adjoint image, a vertex gradient.
+/// Per-thread scratch: eq. 1's buffers by image size and view count, the views of the point,
+/// a vertex gradient and the view gradients.
 #[derive(Default)]
 struct Scratch {
-    renderers: Vec<Renderer>,
-    adjoint: Vec<f32>,
+    losses: Vec<MultiViewLoss>,
+    views: Vec<View>,
     grad_pos: Vec<Vec3>,
+    grad_views: Vec<[f64; N_VIEW_PARAMS]>,
 }
 
 thread_local! {
     static SCRATCH: RefCell<Scratch> = RefCell::new(Scratch::default());
 }
 
-/// The renderer for `w × h` in `renderers`, made on first use (at most a few sizes are kept).
-fn renderer_for(
-    renderers: &mut Vec<Renderer>,
+/// The loss for `n` views of `w × h` in `losses`, made on first use (at most a few are kept).
+fn loss_for(
+    losses: &mut Vec<MultiViewLoss>,
     w: u32,
     h: u32,
-    parallel: bool,
-) -> Result<&mut Renderer, String> {
-    {
-        let found = renderers
-            .iter()
-            .position(|r| r.width() == w && r.height() == h);
-        let i = match found {
-            Some(i) => i,
-            None => {
-                if renderers.len() >= 4 {
-                    renderers.remove(0);
-                }
-                renderers.push(Renderer::new(w, h).map_err(|e| e.to_string())?);
-                renderers.len() - 1
+    n: usize,
+    parallel_render: bool,
+) -> Result<&mut MultiViewLoss, String> {
+    let found = losses
+        .iter()
+        .position(|l| l.width() == w && l.height() == h && l.n_views() == n);
+    let i = match found {
+        Some(i) => i,
+        None => {
+            if losses.len() >= 4 {
+                losses.remove(0);
             }
-        };
-        let r = &mut renderers[i];
-        r.set_parallel(parallel);
-        Ok(r)
-    }
+            losses.push(MultiViewLoss::new(w, h, n).map_err(|e| e.to_string())?);
+            losses.len() - 1
+        }
+    };
+    let l = &mut losses[i];
+    l.set_parallel_render(parallel_render);
+    Ok(l)
 }
 
 /// Most edge structures kept; a building has one per combination of its discrete values.
@@ -256,7 +265,6 @@ impl FitObjective {
         let topo = self.topologies.get(self.key(gen_x), &mesh)?;
         let topo = &topo.1;
         let (w, h) = self.size();
-        let weight = 1.0 / layout.n_views as f64;
         let mut loss = 0.0;
         let mut grad = grad;
         SCRATCH.with(|cell| -> Result<(), String> {
@@ -268,52 +276,36 @@ impl FitObjective {
                 Some(s) => s,
                 None => own.insert(Scratch::default()),
             };
-            scratch.adjoint.resize(w as usize * h as usize, 0.0);
+            let n = layout.n_views;
+            scratch.views.clear();
+            scratch.views.extend((0..n).map(|v| self.view(x, v)));
+            let eq1 = loss_for(&mut scratch.losses, w, h, n, self.parallel_render)?;
+            let Some(g) = grad.as_deref_mut() else {
+                loss += eq1
+                    .value(topo, &mesh.positions, &scratch.views, &self.masks)
+                    .map_err(|e| e.to_string())?;
+                return Ok(());
+            };
             scratch.grad_pos.clear();
             scratch.grad_pos.resize(mesh.positions.len(), Vec3::ZERO);
-            if let Some(g) = grad.as_deref_mut() {
-                g.fill(0.0);
+            scratch.grad_views.clear();
+            scratch.grad_views.resize(n, [0.0; N_VIEW_PARAMS]);
+            // Eq. 1: the mean over views of the per-view MSE.
+            loss += eq1
+                .evaluate(
+                    topo,
+                    &mesh.positions,
+                    &scratch.views,
+                    &self.masks,
+                    &mut scratch.grad_pos,
+                    &mut scratch.grad_views,
+                )
+                .map_err(|e| e.to_string())?;
+            g.fill(0.0);
+            for (v, (gv, view)) in scratch.grad_views.iter().zip(&scratch.views).enumerate() {
+                pull_back_view(layout, x, v, gv, view.params.scale, g);
             }
-            for (v, mask) in self.masks.iter().enumerate() {
-                let view = self.view(x, v);
-                let renderer = renderer_for(&mut scratch.renderers, w, h, self.parallel_render)?;
-                let coverage = renderer
-                    .forward(topo, &mesh.positions, &view)
-                    .map_err(|e| e.to_string())?;
-                // Eq. 1: the mean over views of the per-view MSE.
-                loss += loss::mse_with_adjoint(coverage, mask, weight, &mut scratch.adjoint)
-                    .map_err(|e| e.to_string())?;
-                if let Some(g) = grad.as_deref_mut() {
-                    let renderer =
-                        renderer_for(&mut scratch.renderers, w, h, self.parallel_render)?;
-                    let mut gv = [0.0; N_VIEW_PARAMS];
-                    renderer
-                        .backward(
-                            topo,
-                            &mesh.positions,
-                            &view,
-                            &scratch.adjoint,
-                            &mut scratch.grad_pos,
-                            &mut gv,
-                        )
-                        .map_err(|e| e.to_string())?;
-                    // ViewParams order: yaw pitch roll tx ty tz scale fov pp_x pp_y.
-                    let o = layout.view_offset(v);
-                    let vars = layout.view_vars(x, v);
-                    let j = super::views::renderer_angles_jacobian(vars.yaw, vars.pitch, vars.roll);
-                    for m in 0..3 {
-                        g[o + m] = (0..3).map(|k| j[k][m] * gv[k]).sum();
-                    }
-                    g[o + 3] = gv[3];
-                    g[o + 4] = gv[4];
-                    // d/d ln s = s · d/ds.
-                    g[o + 5] = gv[6] * view.params.scale;
-                    if layout.fit_fov {
-                        g[o + 6] = gv[7];
-                    }
-                }
-            }
-            if let (Some(g), Some(vjp)) = (grad.as_deref_mut(), vjp.as_ref()) {
+            if let Some(vjp) = vjp.as_ref() {
                 // Eq. 2: dLoss/dP = dLoss/dpos · dpos/dP.
                 vjp.vjp(&scratch.grad_pos, &mut g[..layout.n_gen])
                     .map_err(|e| e.to_string())?;
@@ -356,6 +348,37 @@ impl Objective for FitObjective {
                 f64::INFINITY
             }
         }
+    }
+}
+
+/// Writes dL/d(view `v`'s values) into `grad` from the renderer's dL/d(view parameters) `gv`
+/// ([`ViewParams::NAMES`](crate::camera::ViewParams::NAMES) order) at point `x`, whose object
+/// scale is `scale`.
+fn pull_back_view(
+    layout: &Layout,
+    x: &[f64],
+    v: usize,
+    gv: &[f64; N_VIEW_PARAMS],
+    scale: f64,
+    grad: &mut [f64],
+) {
+    use crate::camera::ViewParams as P;
+    let vars = layout.view_vars(x, v);
+    let j = super::views::renderer_angles_jacobian(vars.yaw, vars.pitch, vars.roll);
+    // The renderer's angles are functions of all three of ours.
+    let renderer = [P::YAW, P::PITCH, P::ROLL];
+    for (m, slot) in [ViewSlot::Yaw, ViewSlot::Pitch, ViewSlot::Roll]
+        .into_iter()
+        .enumerate()
+    {
+        grad[layout.slot(v, slot)] = (0..3).map(|k| j[k][m] * gv[renderer[k]]).sum();
+    }
+    grad[layout.slot(v, ViewSlot::Tx)] = gv[P::TX];
+    grad[layout.slot(v, ViewSlot::Ty)] = gv[P::TY];
+    // d/d ln s = s · d/ds.
+    grad[layout.slot(v, ViewSlot::LogScale)] = gv[P::SCALE] * scale;
+    if layout.fit_fov {
+        grad[layout.slot(v, ViewSlot::FovY)] = gv[P::FOV_Y];
     }
 }
 

@@ -50,6 +50,50 @@ pub const DEFAULT_FOV_Y: f64 = 0.471_089_961_441_726_7;
 /// Fitted values per view, in this order (plus `fov_y` when fitted).
 pub const VIEW_VARS: [&str; 6] = ["yaw", "pitch", "roll", "tx", "ty", "log_scale"];
 
+/// Where each of a view's fitted values sits among the view's values in the optimisation
+/// vector ([`VIEW_VARS`] order, the field of view last when it is fitted); see
+/// [`Layout::slot`](super::Layout::slot).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ViewSlot {
+    /// [`ViewVars::yaw`].
+    Yaw = 0,
+    /// [`ViewVars::pitch`].
+    Pitch = 1,
+    /// [`ViewVars::roll`].
+    Roll = 2,
+    /// [`ViewVars::tx`].
+    Tx = 3,
+    /// [`ViewVars::ty`].
+    Ty = 4,
+    /// [`ViewVars::log_scale`].
+    LogScale = 5,
+    /// [`ViewVars::fov_y`] (only when the field of view is fitted).
+    FovY = 6,
+}
+
+impl ViewSlot {
+    /// The slots in vector order.
+    pub const ALL: [ViewSlot; 7] = [
+        ViewSlot::Yaw,
+        ViewSlot::Pitch,
+        ViewSlot::Roll,
+        ViewSlot::Tx,
+        ViewSlot::Ty,
+        ViewSlot::LogScale,
+        ViewSlot::FovY,
+    ];
+
+    /// Index among the view's values.
+    pub fn index(self) -> usize {
+        self as usize
+    }
+
+    /// Values per view: 6, or 7 with the field of view.
+    pub fn count(fit_fov: bool) -> usize {
+        if fit_fov { 7 } else { 6 }
+    }
+}
+
 /// The vertical field of view of a photo `width × height` taken at a 35 mm-equivalent focal
 /// length `focal_35mm` (EXIF `FocalLengthIn35mmFilm`): the equivalent focal length refers to the
 /// 43.27 mm diagonal of a 36 × 24 mm frame, so the diagonal field of view is
@@ -239,33 +283,38 @@ impl ViewVars {
         }
     }
 
-    /// Writes the fitted values into `out` (6 or 7 entries, see [`VIEW_VARS`]).
+    /// The value in `slot`.
+    pub fn get(&self, slot: ViewSlot) -> f64 {
+        match slot {
+            ViewSlot::Yaw => self.yaw,
+            ViewSlot::Pitch => self.pitch,
+            ViewSlot::Roll => self.roll,
+            ViewSlot::Tx => self.tx,
+            ViewSlot::Ty => self.ty,
+            ViewSlot::LogScale => self.log_scale,
+            ViewSlot::FovY => self.fov_y,
+        }
+    }
+
+    /// Writes the fitted values into `out` (6 or 7 entries, see [`ViewSlot`]).
     pub fn write(&self, out: &mut [f64]) {
-        let v = [
-            self.yaw,
-            self.pitch,
-            self.roll,
-            self.tx,
-            self.ty,
-            self.log_scale,
-            self.fov_y,
-        ];
-        let n = out.len().min(7);
-        out[..n].copy_from_slice(&v[..n]);
+        for (o, slot) in out.iter_mut().zip(ViewSlot::ALL) {
+            *o = self.get(slot);
+        }
     }
 
     /// Reads fitted values from `v` (6 entries, or 7 with the field of view); `fov_y` is used
     /// when `v` has only 6.
     pub fn read(v: &[f64], fov_y: f64) -> ViewVars {
-        let at = |i: usize, d: f64| v.get(i).copied().unwrap_or(d);
+        let at = |s: ViewSlot, d: f64| v.get(s.index()).copied().unwrap_or(d);
         ViewVars {
-            yaw: at(0, 0.0),
-            pitch: at(1, 0.0),
-            roll: at(2, 0.0),
-            tx: at(3, 0.0),
-            ty: at(4, 0.0),
-            log_scale: at(5, 0.0),
-            fov_y: at(6, fov_y),
+            yaw: at(ViewSlot::Yaw, 0.0),
+            pitch: at(ViewSlot::Pitch, 0.0),
+            roll: at(ViewSlot::Roll, 0.0),
+            tx: at(ViewSlot::Tx, 0.0),
+            ty: at(ViewSlot::Ty, 0.0),
+            log_scale: at(ViewSlot::LogScale, 0.0),
+            fov_y: at(ViewSlot::FovY, fov_y),
         }
     }
 }

@@ -27,7 +27,8 @@
 //! 4×4 sub-samples (mean error ≈ 0.03 per boundary pixel, unbiased: see
 //! `tests/render_forward.rs`), which is what finite differences of the product loss see.
 //!
-//! Also here: [`MultiViewLoss`] (eq. 1 over several views, rayon over views),
+//! Also here: [`MultiViewLoss`] (eq. 1 over several views: the one implementation, which the
+//! fit, the benches and the tests run),
 //! [`LabelRenderer`] (front-most label per sub-sample, forward only), [`testmesh`] (known
 //! shapes) and [`bench`](mod@bench) (the benchmark workload, also for timing in wasm).
 //!

@@ -196,9 +196,9 @@ impl FitSession {
     /// One bounded slice of work; returns where the fit stands.
     pub fn step(&mut self) -> Result<JsValue, JsError> {
         let p = self.session.step();
-        self.preview = p
-            .preview
-            .as_ref()
+        self.preview = self
+            .session
+            .preview()
             .map(|m| (m.width(), m.height(), m.to_luma8()));
         let out = StepOut {
             stage: p.stage,

@@ -1,0 +1,91 @@
+//! The hand-over from stage 1 (memetic, 128²) to stage 2 (Adam, 256²): which stage-1
+//! individuals go on ([`probe_starts`]), Occam's step ([`simplify`]) and the short Adam runs
+//! that pick one ([`probe`]). With window labels the layout search
+//! ([`super::layout_search`]) runs first.
+
+use super::objective::FitObjective;
+use crate::generators::{ParamKind, ParamSpec};
+use crate::optim::{AdamConfig, Domain, Individual, Memetic, Objective};
+
+/// Tolerance of [`simplify`]: how much worse (relative) a simpler model may fit.
+const SIMPLER_TOLERANCE: f64 = 0.005;
+
+/// Occam's step between stage 1 and stage 2: every Boolean parameter that is on (a mug's
+/// handle) is switched off when that fits the views as well, within [`SIMPLER_TOLERANCE`]. A
+/// part hidden from every view costs nothing in eq. 1, so stage 1 keeps it or not at random;
+/// the evaluation — and the user — see it from all sides. Returns the evaluations spent.
+fn simplify(objective: &FitObjective, specs: &[ParamSpec], x: &mut [f64]) -> usize {
+    let mut spent = 1;
+    let mut current = objective.value(x);
+    for (i, s) in specs.iter().enumerate() {
+        if !matches!(s.kind, ParamKind::Boolean) || x[i] < 0.5 {
+            continue;
+        }
+        x[i] = 0.0;
+        let off = objective.value(x);
+        spent += 1;
+        if off <= current * (1.0 + SIMPLER_TOLERANCE) {
+            current = off.min(current);
+        } else {
+            x[i] = 1.0;
+        }
+    }
+    spent
+}
+
+/// Stage-1 individuals tried at stage-2 resolution before stage 2 commits to one.
+pub(super) const PROBES: usize = 4;
+
+/// Adam iterations of each probe.
+const PROBE_ITERATIONS: usize = 12;
+
+/// The hand-over from stage 1 to stage 2. At 128² and coarse detail a wrong basin (another
+/// camera elevation with a compensating shape) can score a hair better than the right one, so
+/// the best few distinct individuals are each simplified ([`simplify`]) and given a short Adam
+/// run at stage 2's resolution; the best goes on. Returns it and the evaluations
+/// spent.
+pub(super) fn probe(
+    objective: &FitObjective,
+    domain: &Domain,
+    specs: &[ParamSpec],
+    starts: Vec<Vec<f64>>,
+) -> (Vec<f64>, usize) {
+    let adam = AdamConfig {
+        iterations: PROBE_ITERATIONS,
+        lr: 0.01,
+        ..AdamConfig::default()
+    };
+    // Sequential: each evaluation already renders in parallel, and nesting the two would let
+    // rayon interleave evaluations on one thread.
+    let results: Vec<(Vec<f64>, f64, usize)> = starts
+        .into_iter()
+        .map(|mut x| {
+            let spent = simplify(objective, specs, &mut x);
+            let (ind, evals) = crate::optim::adam_search(objective, domain, &x, &adam);
+            (ind.x, ind.value, spent + evals)
+        })
+        .collect();
+    let spent = results.iter().map(|r| r.2).sum();
+    let best = results
+        .into_iter()
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|r| r.0)
+        .unwrap_or_default();
+    (best, spent)
+}
+
+/// The best few distinct individuals of stage 1, the best (`best`) first.
+pub(super) fn probe_starts(memetic: &Memetic, best: &[f64]) -> Vec<Vec<f64>> {
+    let mut pop: Vec<&Individual> = memetic.population().iter().collect();
+    pop.sort_by(|a, b| a.value.total_cmp(&b.value));
+    let mut starts: Vec<Vec<f64>> = vec![best.to_vec()];
+    for ind in &pop {
+        if starts.len() >= PROBES {
+            break;
+        }
+        if !starts.contains(&ind.x) {
+            starts.push(ind.x.clone());
+        }
+    }
+    starts
+}

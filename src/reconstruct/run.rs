@@ -1,0 +1,480 @@
+//! One run of the three stages, as a resumable stage machine: stage 1 (the memetic search of
+//! each candidate generator, then the chosen one), the hand-over ([`super::handover`]), Adam
+//! stages 2 and 3. A [`super::Session`] makes [`FitConfig::restarts`] of them.
+
+use super::FitError;
+use super::config::{FitConfig, Plan};
+use super::handover::{PROBES, probe, probe_starts};
+use super::layout_search::{SWEEP_WORK, window_sweep};
+use super::objective::{FitObjective, Layout, render_coverage, resample_mask};
+use super::seeds::{SINGLE_VIEW_POPULATION, start_points};
+use super::session::{FitResult, PREVIEW_SIDE, Progress};
+use super::windows::WindowTerm;
+use crate::generators::{Generator, Lod};
+use crate::mask::Mask;
+use crate::model::Model;
+use crate::optim::{Adam, AdamConfig, Domain, Memetic, MemeticConfig, Objective};
+use std::sync::Arc;
+
+/// Adam iterations per [`Run::step`] in stages 2 and 3.
+const ADAM_SLICE: usize = 5;
+
+/// One generator's stage-1 search.
+struct Search {
+    generator: &'static dyn Generator,
+    objective: FitObjective,
+    memetic: Memetic,
+}
+
+/// A gradient stage in progress.
+struct AdamStage {
+    stage: u8,
+    objective: FitObjective,
+    domain: Domain,
+    adam: Adam,
+    x: Vec<f64>,
+    grad: Vec<f64>,
+    best: (Vec<f64>, f64),
+    iteration: usize,
+    iterations: usize,
+    decay: f64,
+}
+
+enum Phase {
+    Search,
+    Adam(Box<AdamStage>),
+    Done,
+}
+
+/// A best point: its generator, layout, values, loss and the stage that found it.
+#[derive(Clone)]
+struct Best {
+    generator: &'static dyn Generator,
+    layout: Layout,
+    x: Vec<f64>,
+    loss: f64,
+    stage: u8,
+}
+
+/// One run of the three stages; a [`super::Session`] makes [`FitConfig::restarts`] of them.
+pub(super) struct Run {
+    config: FitConfig,
+    masks: Vec<Mask>,
+    /// The window term, shared by every stage's objective.
+    windows: Option<Arc<WindowTerm>>,
+    fov: Vec<f64>,
+    searches: Vec<Search>,
+    /// Index of the search being stepped; after the `auto` round, the chosen one.
+    current: usize,
+    /// Stage-1 evaluations each search gets before `auto` picks (all of them when only one).
+    short_budget: usize,
+    chosen: bool,
+    phase: Phase,
+    /// Best of the finished stages.
+    best: Option<Best>,
+    pub(super) evaluations: usize,
+    stage_iterations: [usize; 2],
+    pub(super) work_done: f64,
+    pub(super) work_total: f64,
+}
+
+/// Relative cost of one evaluation at `side` compared to 128² (pixels, roughly).
+fn work_weight(side: u32) -> f64 {
+    let r = f64::from(side) / 128.0;
+    r * r
+}
+
+impl Run {
+    /// Starts run `config` (its own seed) of a fit of `masks` checked into `plan` (by
+    /// [`FitConfig::plan`]). Nothing is evaluated yet. Errors only when no seed of a
+    /// generator can be placed in the views, or on a bad search domain.
+    pub(super) fn new(config: FitConfig, masks: Vec<Mask>, plan: &Plan) -> Result<Run, FitError> {
+        let Plan {
+            windows,
+            stats,
+            fov,
+            candidates,
+            start,
+            stage1,
+        } = plan;
+        let (windows, fov, stage1) = (windows.clone(), fov.clone(), *stage1);
+        let (w0, h0) = (masks[0].width(), masks[0].height());
+        let short_budget = if candidates.len() > 1 {
+            (stage1 * 3 / (4 * candidates.len())).max(1)
+        } else {
+            stage1
+        };
+        let small: Vec<Mask> = masks
+            .iter()
+            .map(|m| resample_mask(m, config.resolutions[0]))
+            .collect();
+        let mut searches = Vec::new();
+        for (k, &g) in candidates.iter().enumerate() {
+            let (layout, domain, seeds) = start_points(
+                g,
+                start.as_deref(),
+                stats,
+                &fov,
+                config.fit_fov,
+                windows.is_none(),
+            )?;
+            let objective = FitObjective::new(
+                g,
+                config.lods[0],
+                layout,
+                small.clone(),
+                config.search_reg_weight,
+                false,
+            )
+            .with_windows(windows.clone());
+            let memetic = Memetic::new(
+                domain,
+                &seeds,
+                MemeticConfig {
+                    max_evaluations: short_budget,
+                    seed: config.seed.wrapping_add(k as u64),
+                    population: if masks.len() == 1 {
+                        SINGLE_VIEW_POPULATION
+                    } else {
+                        MemeticConfig::default().population
+                    },
+                    ..MemeticConfig::default()
+                },
+            )
+            .map_err(|e| FitError(e.to_string()))?;
+            searches.push(Search {
+                generator: g,
+                objective,
+                memetic,
+            });
+        }
+        let q = config.quality;
+        let stage_iterations = [
+            ((100.0 * q).round() as usize).max(1),
+            ((60.0 * q).round() as usize).max(1),
+        ];
+        let long = w0.max(h0);
+        let side = |i: usize| config.resolutions[i].min(long);
+        let sweep = if windows.is_some() {
+            SWEEP_WORK * work_weight(side(0))
+        } else {
+            0.0
+        };
+        let work_total = sweep
+            + stage1 as f64 * work_weight(side(0))
+            + stage_iterations[0] as f64 * work_weight(side(1)) * 2.0
+            + stage_iterations[1] as f64 * work_weight(side(2)) * 2.0;
+        Ok(Run {
+            config,
+            masks,
+            windows,
+            fov,
+            searches,
+            current: 0,
+            short_budget,
+            chosen: candidates.len() == 1,
+            phase: Phase::Search,
+            best: None,
+            evaluations: 0,
+            stage_iterations,
+            work_done: 0.0,
+            work_total,
+        })
+    }
+
+    fn stage_side(&self, i: usize) -> u32 {
+        let long = self.masks[0].width().max(self.masks[0].height());
+        self.config.resolutions[i].min(long)
+    }
+
+    /// Whether the fit is finished.
+    pub fn is_done(&self) -> bool {
+        matches!(self.phase, Phase::Done)
+    }
+
+    /// Does one bounded slice of work and reports progress. After the end it only reports.
+    pub fn step(&mut self) -> Progress {
+        match std::mem::replace(&mut self.phase, Phase::Done) {
+            Phase::Search => self.step_search(),
+            Phase::Adam(stage) => self.step_adam(stage),
+            Phase::Done => {}
+        }
+        self.progress()
+    }
+
+    fn step_search(&mut self) {
+        let side = self.stage_side(0);
+        let search = &mut self.searches[self.current];
+        let before = search.memetic.status().evaluations;
+        let status = search.memetic.step(&search.objective);
+        let spent = status.evaluations - before;
+        self.evaluations += spent;
+        self.work_done += spent as f64 * work_weight(side);
+        self.phase = Phase::Search;
+        if !status.done {
+            return;
+        }
+        if !self.chosen {
+            if self.current + 1 < self.searches.len() {
+                self.current += 1;
+                return;
+            }
+            // `auto`: continue the best generator with the rest of the stage-1 budget.
+            let best = (0..self.searches.len())
+                .min_by(|&a, &b| {
+                    let va = self.searches[a].memetic.status().best_value;
+                    let vb = self.searches[b].memetic.status().best_value;
+                    va.total_cmp(&vb)
+                })
+                .unwrap_or(0);
+            self.current = best;
+            self.chosen = true;
+            let total = self.config.stage1_evaluations();
+            let rest = total.saturating_sub(self.short_budget * self.searches.len());
+            if rest > 0 {
+                self.searches[best].memetic.extend_budget(rest);
+                return;
+            }
+        }
+        let search = &self.searches[self.current];
+        let Some(best) = search.memetic.best() else {
+            self.phase = Phase::Done;
+            return;
+        };
+        self.best = Some(Best {
+            generator: search.generator,
+            layout: search.objective.layout().clone(),
+            x: best.x.clone(),
+            loss: best.value,
+            stage: 1,
+        });
+        let mut starts = probe_starts(&search.memetic, &best.x);
+        let specs = search.generator.params();
+        if search.objective.has_windows() {
+            // Window labels can tell layouts that the silhouette cannot (see `window_sweep`).
+            let (x, spent) = window_sweep(
+                &search.objective,
+                search.memetic.domain(),
+                specs,
+                best.x.clone(),
+            );
+            self.evaluations += spent;
+            // Most of the sweep's evaluations carry a gradient (the repairs).
+            self.work_done += 1.75 * spent as f64 * work_weight(side);
+            starts.retain(|s| *s != x);
+            starts.insert(0, x);
+            starts.truncate(PROBES);
+        }
+        self.phase = self.start_adam(2, starts[0].clone());
+        if let Phase::Adam(stage) = &mut self.phase {
+            let side =
+                self.config.resolutions[1].min(self.masks[0].width().max(self.masks[0].height()));
+            let (x, spent) = probe(&stage.objective, &stage.domain, specs, starts);
+            stage.x = x;
+            self.evaluations += spent;
+            self.work_done += 2.0 * spent as f64 * work_weight(side);
+        }
+    }
+
+    /// Builds gradient stage `stage` (2 or 3) from point `x`.
+    fn start_adam(&self, stage: u8, x: Vec<f64>) -> Phase {
+        let search = &self.searches[self.current];
+        let g = search.generator;
+        let i = usize::from(stage - 1);
+        let lod = self.config.lods[i];
+        let lr = if stage == 2 { 0.01 } else { 0.0075 };
+        let masks = self
+            .masks
+            .iter()
+            .map(|m| resample_mask(m, self.config.resolutions[i]))
+            .collect();
+        let objective = FitObjective::new(
+            g,
+            lod,
+            search.objective.layout().clone(),
+            masks,
+            self.config.reg_weight,
+            true,
+        )
+        .with_windows(self.windows.clone());
+        let domain = search.memetic.domain().clone();
+        let adam = Adam::new(
+            &domain,
+            &AdamConfig {
+                lr,
+                ..AdamConfig::default()
+            },
+        );
+        let iterations = self.stage_iterations[i - 1];
+        let n = x.len();
+        Phase::Adam(Box::new(AdamStage {
+            stage,
+            objective,
+            domain,
+            adam,
+            x,
+            grad: vec![0.0; n],
+            best: (Vec::new(), f64::INFINITY),
+            iteration: 0,
+            iterations,
+            // The step shrinks to a fifth over the stage, so it ends finer than it starts.
+            decay: 0.2f64.powf(1.0 / iterations as f64),
+        }))
+    }
+
+    fn step_adam(&mut self, mut s: Box<AdamStage>) {
+        let side = self.stage_side(usize::from(s.stage - 1));
+        let end = (s.iteration + ADAM_SLICE).min(s.iterations);
+        while s.iteration < end {
+            let value = s.objective.value_grad(&s.x, &mut s.grad);
+            self.evaluations += 1;
+            self.work_done += 2.0 * work_weight(side);
+            if value < s.best.1 {
+                s.best = (s.x.clone(), value);
+            }
+            s.iteration += 1;
+            if !value.is_finite() {
+                // The point fails at this detail (should not happen for a point the previous
+                // stage could render): stop the stage, keeping the best so far.
+                s.iteration = s.iterations;
+                break;
+            }
+            s.adam.step(&s.domain, &mut s.x, &s.grad);
+            s.adam.scale_rates(s.decay);
+        }
+        if s.iteration < s.iterations {
+            self.phase = Phase::Adam(s);
+            return;
+        }
+        if s.best.1.is_finite()
+            && let Some(best) = self.best.as_mut()
+        {
+            best.x = s.best.0.clone();
+            best.loss = s.best.1;
+            best.stage = s.stage;
+        }
+        self.phase = if s.stage == 2 {
+            let x = self
+                .best
+                .as_ref()
+                .map_or_else(|| s.x.clone(), |b| b.x.clone());
+            self.start_adam(3, x)
+        } else {
+            Phase::Done
+        };
+        if matches!(self.phase, Phase::Done) {
+            self.work_done = self.work_total;
+        }
+    }
+
+    /// The best point so far.
+    fn current_best(&self) -> Option<Best> {
+        match &self.phase {
+            Phase::Adam(s) if s.best.1.is_finite() => Some(Best {
+                generator: self.searches[self.current].generator,
+                layout: s.objective.layout().clone(),
+                x: s.best.0.clone(),
+                loss: s.best.1,
+                stage: s.stage,
+            }),
+            Phase::Search => {
+                let search = &self.searches[self.current];
+                search.memetic.best().map(|b| Best {
+                    generator: search.generator,
+                    layout: search.objective.layout().clone(),
+                    x: b.x.clone(),
+                    loss: b.value,
+                    stage: 1,
+                })
+            }
+            _ => None,
+        }
+        .or_else(|| self.best.clone())
+    }
+
+    /// Where the run stands (what [`Run::step`] returns).
+    pub fn progress(&self) -> Progress {
+        let (stage, iteration) = match &self.phase {
+            Phase::Search => (1, self.searches[self.current].memetic.status().generation),
+            Phase::Adam(s) => (s.stage, s.iteration),
+            Phase::Done => (3, self.stage_iterations[1]),
+        };
+        let best = self.current_best();
+        let generator = best
+            .as_ref()
+            .map_or(self.searches[self.current].generator.name(), |b| {
+                b.generator.name()
+            });
+        let (params, cameras, loss) = match &best {
+            Some(b) => {
+                let cams = (0..b.layout.n_views)
+                    .map(|i| b.layout.view_vars(&b.x, i).params())
+                    .collect();
+                (b.x[..b.layout.n_gen].to_vec(), cams, b.loss)
+            }
+            None => (Vec::new(), Vec::new(), f64::INFINITY),
+        };
+        Progress {
+            stage,
+            generator,
+            iteration,
+            evaluations: self.evaluations,
+            work_done: self.work_done.min(self.work_total),
+            work_total: self.work_total,
+            best_loss: loss,
+            params,
+            cameras,
+            run: 1,
+            runs: 1,
+            done: self.is_done(),
+        }
+    }
+
+    /// The silhouette of the best point so far seen from view 0, at most [`PREVIEW_SIDE`] a
+    /// side (`None` before anything was evaluated). Rendered on each call.
+    pub fn preview(&self) -> Option<Mask> {
+        let Best {
+            generator: g,
+            layout,
+            x,
+            ..
+        } = self.current_best()?;
+        let small = resample_mask(&self.masks[0], PREVIEW_SIDE);
+        let view = layout.view_vars(&x, 0).view(small.width(), small.height());
+        let mesh = g.generate(&x[..layout.n_gen], Lod::Low).ok()?;
+        let coverage = render_coverage(&mesh, &view).ok()?;
+        Mask::new(view.width, view.height, coverage).ok()
+    }
+
+    /// The best model and cameras so far (the final result once done). Errors only when
+    /// nothing could be evaluated.
+    pub fn result(&self) -> Result<FitResult, FitError> {
+        let Best {
+            generator: g,
+            layout,
+            x,
+            loss,
+            ..
+        } = self
+            .current_best()
+            .ok_or_else(|| FitError("nothing was evaluated yet".into()))?;
+        let mut model = Model::new(g.name(), &x[..layout.n_gen], Lod::Medium)
+            .map_err(|e| FitError(e.to_string()))?;
+        model.seed = Some(self.config.seed);
+        let (w, h) = (self.masks[0].width(), self.masks[0].height());
+        let views = (0..layout.n_views)
+            .map(|v| layout.view_vars(&x, v).view(w, h))
+            .collect();
+        Ok(FitResult {
+            model,
+            views,
+            loss,
+            evaluations: self.evaluations,
+        })
+    }
+
+    /// The fields of view used for the views.
+    pub fn fov(&self) -> &[f64] {
+        &self.fov
+    }
+}
