@@ -131,47 +131,128 @@ fn exif_fov(bytes: &[u8], width: u32, height: u32) -> Option<f64> {
 /// A mask from an image file: a mask image when it is grey and nearly binary or has
 /// transparency, else a photo segmented automatically.
 fn load_mask(path: &Path) -> Result<Mask, String> {
-    Ok(load_view(path)?.0)
+    Ok(load_view(path)?.mask)
 }
 
-/// An image file's bytes and its pixels as RGBA; a one-line error when it is not an image.
+/// An image file's bytes and its pixels as RGBA, at full size (the tree labels' path); a
+/// one-line error when it is not an image or is cut off.
 fn read_image(path: &Path) -> Result<(Vec<u8>, image::RgbaImage), String> {
     let bytes = read(path)?;
+    segment::decode::check_complete(&bytes).map_err(|e| format!("{}: {e}", path.display()))?;
     let img = image::load_from_memory(&bytes)
         .map_err(|e| format!("{}: not a readable image ({e})", path.display()))?;
     Ok((bytes, img.to_rgba8()))
 }
 
-/// A view's mask and, for a photo with EXIF, its field of view.
-fn load_view(path: &Path) -> Result<(Mask, Option<f64>), String> {
-    let (bytes, rgba) = read_image(path)?;
-    let (w, h) = rgba.dimensions();
-    let px = rgba.as_raw();
-    let transparent = px.chunks_exact(4).any(|p| p[3] < 128);
-    if transparent {
-        let v = px.chunks_exact(4).map(|p| p[3]).collect::<Vec<_>>();
-        let mask = Mask::from_luma8(w, h, &v).map_err(|e| format!("{}: {e}", path.display()))?;
-        return Ok((mask, exif_fov(&bytes, w, h)));
-    }
-    let grey = px.chunks_exact(4).all(|p| p[0] == p[1] && p[1] == p[2]);
-    let binary = px
-        .chunks_exact(4)
-        .filter(|p| p[0] < 16 || p[0] > 239)
-        .count()
-        >= px.len() / 4 * 95 / 100;
-    if grey && binary {
-        let v = px.chunks_exact(4).map(|p| p[0]).collect::<Vec<_>>();
-        let mask = Mask::from_luma8(w, h, &v).map_err(|e| format!("{}: {e}", path.display()))?;
-        return Ok((mask, exif_fov(&bytes, w, h)));
-    }
+/// One view as loaded: its mask at the working size, the file's own size in pixels (upright),
+/// and for a photo with EXIF its field of view.
+struct LoadedView {
+    mask: Mask,
+    file_size: (u32, u32),
+    fov: Option<f64>,
+}
+
+/// A view's mask. The file is decoded once, straight to the working size (a large JPEG by a
+/// scaled DCT decode), so a 4000×3000 mask costs what a 512² one does: a mask image (grey and
+/// nearly binary, or with transparency) becomes soft coverage — the share of object pixels
+/// under each working pixel — and a photo is segmented automatically.
+fn load_view(path: &Path) -> Result<LoadedView, String> {
+    let bytes = read(path)?;
+    let at = |e: &dyn std::fmt::Display| format!("{}: {e}", path.display());
     let photo = Photo::decode(&bytes, segment::WORKING_SIDE)
-        .map_err(|e| format!("{}: {e}", path.display()))?;
-    let seg = segment::segment_auto(&photo).map_err(|e| format!("{}: {e}", path.display()))?;
-    for w in &seg.warnings {
-        eprintln!("procfit: {}: {w}", path.display());
+        .map_err(|e| format!("{}: not a readable image ({e})", path.display()))?;
+    let (w, h) = (photo.width(), photo.height());
+    let file_size = photo.source_size();
+    let px = photo.rgba();
+    let coverage = |v: &[u8]| {
+        Mask::new(w, h, v.iter().map(|&c| f32::from(c) / 255.0).collect()).map_err(|e| at(&e))
+    };
+    let mask = if photo.has_alpha() && px.chunks_exact(4).any(|p| p[3] < 128) {
+        coverage(&px.chunks_exact(4).map(|p| p[3]).collect::<Vec<_>>())?
+    } else if px.chunks_exact(4).all(|p| p[0] == p[1] && p[1] == p[2])
+        && px
+            .chunks_exact(4)
+            .filter(|p| p[0] < 16 || p[0] > 239)
+            .count()
+            >= px.len() / 4 * 95 / 100
+    {
+        coverage(&px.chunks_exact(4).map(|p| p[0]).collect::<Vec<_>>())?
+    } else {
+        let seg = segment::segment_auto(&photo).map_err(|e| at(&e))?;
+        for w in &seg.warnings {
+            eprintln!("procfit: {}: {w}", path.display());
+        }
+        seg.mask
+    };
+    let fov = exif_fov(&bytes, mask.width(), mask.height());
+    Ok(LoadedView {
+        mask,
+        file_size,
+        fov,
+    })
+}
+
+/// The views' masks, all at one size. Views of one aspect ratio but different sizes are brought
+/// to the smallest; views of different aspect ratios are refused, naming the files' own sizes.
+fn load_views(paths: &[PathBuf]) -> Result<Vec<LoadedView>, String> {
+    let mut views = paths
+        .iter()
+        .map(|p| load_view(p))
+        .collect::<Result<Vec<_>, _>>()?;
+    let Some(first) = views.first() else {
+        return Ok(views);
+    };
+    let (fw, fh) = first.file_size;
+    for (v, p) in views.iter().zip(paths).skip(1) {
+        let (w, h) = v.file_size;
+        // Aspect ratios agree when the sizes are proportional up to a pixel of rounding.
+        let cross = (i64::from(w) * i64::from(fh) - i64::from(h) * i64::from(fw)).abs();
+        if cross > i64::from(fw.max(w)) + i64::from(fh.max(h)) {
+            return Err(format!(
+                "{} is {w}×{h} but {} is {fw}×{fh}: all views must have the same aspect ratio (the same size, or one size scaled): crop them alike",
+                p.display(),
+                paths[0].display()
+            ));
+        }
     }
-    let fov = exif_fov(&bytes, seg.mask.width(), seg.mask.height());
-    Ok((seg.mask, fov))
+    let (tw, th) = views
+        .iter()
+        .map(|v| (v.mask.width(), v.mask.height()))
+        .min()
+        .unwrap_or((0, 0));
+    for v in &mut views {
+        if (v.mask.width(), v.mask.height()) != (tw, th) {
+            v.mask = resample_mask(&v.mask, tw, th);
+        }
+    }
+    Ok(views)
+}
+
+/// `mask` area-averaged to `tw × th`; a working pixel is don't-care when most of what it covers
+/// is.
+fn resample_mask(mask: &Mask, tw: u32, th: u32) -> Mask {
+    let (w, h) = (mask.width(), mask.height());
+    // Two channels: coverage (don't-care as 0) and whether the pixel counts.
+    let mut two = Vec::with_capacity(mask.values().len() * 2);
+    for &v in mask.values() {
+        let cares = v != Mask::DONT_CARE;
+        two.push(if cares { (v * 255.0).round() as u8 } else { 0 });
+        two.push(if cares { 255 } else { 0 });
+    }
+    // Averaged with the "counts" channel as alpha: grey = coverage among the pixels that
+    // count, alpha = their share.
+    let (small, _) = segment::decode::area_resample(&two, w, h, 2, tw, th);
+    let values = small
+        .chunks_exact(4)
+        .map(|p| {
+            if p[3] < 128 {
+                Mask::DONT_CARE
+            } else {
+                f32::from(p[0]) / 255.0
+            }
+        })
+        .collect();
+    Mask::new(tw, th, values).unwrap_or_else(|_| mask.clone())
 }
 
 fn seconds(s: f64) -> String {
@@ -214,14 +295,10 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
     if a.tree_colors.is_some() {
         return Err("--tree-colors is for --generator tree".into());
     }
-    let views = a
-        .images
-        .iter()
-        .map(|p| load_view(p))
-        .collect::<Result<Vec<_>, _>>()?;
+    let views = load_views(&a.images)?;
     // --fov wins, then the photo's EXIF focal length, then the default.
-    let fov_y = views.iter().map(|v| a.fov.or(v.1)).collect();
-    let masks = views.into_iter().map(|v| v.0).collect::<Vec<_>>();
+    let fov_y = views.iter().map(|v| a.fov.or(v.fov)).collect();
+    let masks = views.into_iter().map(|v| v.mask).collect::<Vec<_>>();
     let config = FitConfig {
         generator,
         start,
@@ -546,4 +623,74 @@ pub fn eval(a: &EvalArgs) -> Result<(), String> {
         println!("input-view IoU: {v:.4}");
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("procfit-recon-cli-{}", std::process::id()));
+        std::fs::create_dir_all(&d).expect("scratch dir");
+        d.join(name)
+    }
+
+    /// A white disc on black, `w × h`.
+    fn disc_png(name: &str, w: u32, h: u32) -> PathBuf {
+        let p = scratch(name);
+        let (cx, cy, r) = (w as f32 / 2.0, h as f32 / 2.0, h as f32 / 4.0);
+        image::GrayImage::from_fn(w, h, |x, y| {
+            let d = ((x as f32 - cx).powi(2) + (y as f32 - cy).powi(2)).sqrt();
+            image::Luma([if d < r { 255 } else { 0 }])
+        })
+        .save(&p)
+        .expect("write png");
+        p
+    }
+
+    /// Issue 19: a 4000×3000 mask took 8× a 512² one; it is now brought to the working size at
+    /// decode, as soft coverage.
+    #[test]
+    fn a_large_mask_is_loaded_at_the_working_size() {
+        let v = load_view(&disc_png("big.png", 4000, 3000)).expect("loads");
+        assert_eq!((v.mask.width(), v.mask.height()), (512, 384));
+        assert_eq!(v.file_size, (4000, 3000));
+        let soft = v
+            .mask
+            .values()
+            .iter()
+            .filter(|&&c| c > 0.0 && c < 1.0)
+            .count();
+        assert!(soft > 0, "edge pixels keep partial coverage");
+        let area = v.mask.area() / (512.0 * 384.0);
+        let truth = std::f64::consts::PI * 0.25f64.powi(2) * 0.75;
+        assert!((area - truth).abs() < 0.005, "area {area} vs {truth}");
+    }
+
+    /// Issue 19: 640×480 + 320×240 failed naming internal sizes; same aspect is now brought to
+    /// one size, another aspect is refused naming the files' own sizes.
+    #[test]
+    fn views_of_one_aspect_share_a_size_and_other_aspects_are_refused() {
+        let (a, b) = (disc_png("a.png", 640, 480), disc_png("b.png", 320, 240));
+        let views = load_views(&[a.clone(), b]).expect("same aspect");
+        for v in &views {
+            assert_eq!((v.mask.width(), v.mask.height()), (320, 240));
+        }
+        let c = disc_png("c.png", 480, 480);
+        let err = load_views(&[a, c]).err().expect("other aspect");
+        assert!(err.contains("480×480") && err.contains("640×480"), "{err}");
+        assert!(err.contains("aspect ratio"), "{err}");
+    }
+
+    #[test]
+    fn resampling_keeps_dont_care_where_most_of_it_is() {
+        let mut values = vec![1.0; 8 * 8];
+        for v in &mut values[..32] {
+            *v = Mask::DONT_CARE;
+        }
+        let m = Mask::new(8, 8, values).expect("mask");
+        let small = resample_mask(&m, 4, 4);
+        assert!(small.values()[..8].iter().all(|&v| v == Mask::DONT_CARE));
+        assert!(small.values()[8..].iter().all(|&v| v == 1.0));
+    }
 }

@@ -281,3 +281,28 @@ fn a_missing_output_folder_fails_before_the_fit() {
     );
     assert!(t.elapsed().as_secs() < 30, "the fit did not start");
 }
+
+/// Issue 19: the first 3 kB of the mug sample (or 95 % of it) was fitted, exit 0, no warning.
+#[test]
+fn a_truncated_jpeg_is_one_line_of_error() {
+    let bytes = std::fs::read("www/samples/mug.jpg").unwrap();
+    for keep in [3000, bytes.len() * 95 / 100] {
+        let cut = scratch(&format!("cut-{keep}.jpg"));
+        std::fs::write(&cut, &bytes[..keep]).unwrap();
+        fails_with(
+            &["reconstruct", s(&cut), "-o", s(&scratch("cut.glb"))],
+            "truncated",
+        );
+        fails_with(
+            &[
+                "reconstruct",
+                "--generator",
+                "tree",
+                s(&cut),
+                "-o",
+                s(&scratch("cut.glb")),
+            ],
+            "truncated",
+        );
+    }
+}

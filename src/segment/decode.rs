@@ -47,6 +47,7 @@ impl Photo {
         if bytes.is_empty() {
             return Err(SegmentError::new("the file is empty"));
         }
+        check_complete(bytes)?;
         if bytes.starts_with(&[0xFF, 0xD8, 0xFF]) {
             match decode_jpeg_scaled(bytes, working_side) {
                 Scaled::Done(photo) => return Ok(photo),
@@ -64,6 +65,7 @@ impl Photo {
         if bytes.is_empty() {
             return Err(SegmentError::new("the file is empty"));
         }
+        check_complete(bytes)?;
         let reader = ImageReader::new(std::io::Cursor::new(bytes))
             .with_guessed_format()
             .map_err(|e| SegmentError(format!("cannot read the image: {e}")))?;
@@ -281,6 +283,27 @@ fn decode_jpeg_scaled(bytes: &[u8], working_side: u32) -> Scaled {
     })
 }
 
+/// Refuses a JPEG that is cut off before its end. JPEG decoders fill the missing rows with grey
+/// and call it a success, so a truncated download would be segmented and fitted as if it were the
+/// photo. A complete JPEG has an end-of-image marker (FF D9) after its last start-of-scan marker
+/// (FF DA); inside entropy-coded data an FF byte is always followed by 00 or a restart marker, so
+/// neither can appear there by accident. (An EXIF thumbnail's markers come before the main
+/// image's scans.) PNG and WebP decoders already fail on truncated data.
+pub fn check_complete(bytes: &[u8]) -> Result<(), SegmentError> {
+    if !bytes.starts_with(&[0xFF, 0xD8, 0xFF]) {
+        return Ok(());
+    }
+    let last_scan = bytes.windows(2).rposition(|w| w == [0xFF, 0xDA]);
+    let complete = last_scan.is_some_and(|sos| bytes[sos..].windows(2).any(|w| w == [0xFF, 0xD9]));
+    if complete {
+        Ok(())
+    } else {
+        Err(SegmentError::new(
+            "the JPEG is truncated (the file ends before the image does): copy or download it again",
+        ))
+    }
+}
+
 fn check_working_side(side: u32) -> Result<(), SegmentError> {
     if !(MIN_SIDE..=4096).contains(&side) {
         return Err(SegmentError(format!(
@@ -446,6 +469,33 @@ mod tests {
         let (out, alpha) = area_resample(&src, 2, 1, 4, 1, 1);
         assert_eq!(out, vec![0, 255, 0, 128]);
         assert!(alpha);
+    }
+
+    #[test]
+    fn a_truncated_jpeg_is_refused_and_a_complete_one_accepted() {
+        let mut jpeg = Vec::new();
+        let img =
+            image::RgbImage::from_fn(64, 48, |x, y| image::Rgb([x as u8 * 4, y as u8 * 5, 90]));
+        image::DynamicImage::ImageRgb8(img)
+            .write_to(
+                &mut std::io::Cursor::new(&mut jpeg),
+                image::ImageFormat::Jpeg,
+            )
+            .expect("encode");
+        assert!(Photo::decode(&jpeg, 512).is_ok());
+        for keep in [jpeg.len() - 2, jpeg.len() * 95 / 100, jpeg.len() / 2, 700] {
+            for decode in [Photo::decode, Photo::decode_full] {
+                let err = decode(&jpeg[..keep], 512)
+                    .err()
+                    .expect("truncated is refused");
+                assert!(err.to_string().contains("truncated"), "{keep}: {err}");
+                assert_eq!(err.to_string().lines().count(), 1);
+            }
+        }
+        // Bytes after the end-of-image marker (some cameras append data) are fine.
+        let mut padded = jpeg.clone();
+        padded.extend_from_slice(b"trailing");
+        assert!(Photo::decode(&padded, 512).is_ok());
     }
 
     #[test]
