@@ -69,6 +69,12 @@ class Handler(http.server.BaseHTTPRequestHandler):
         if self.command != "HEAD":
             self.wfile.write(body)
 
+    def send_error(self, code, message=None, explain=None):
+        # http.server's own replies (501 unknown method, 414 long URI, 431 many headers, 400)
+        # would go out without the isolation headers: route them through fail().
+        self.close_connection = True
+        self.fail(code, message or self.responses.get(code, ("error",))[0])
+
     def resolve(self):
         """Maps the request path to a file under root, or returns an HTTP error code."""
         raw = self.path.split("?", 1)[0].split("#", 1)[0]
@@ -120,6 +126,13 @@ class Handler(http.server.BaseHTTPRequestHandler):
     do_PUT = do_DELETE = do_PATCH = do_POST
 
 
+class Server(http.server.ThreadingHTTPServer):
+    # The page's first load opens many connections at once (a wasm module per worker thread);
+    # socketserver's backlog of 5 made some wait for SYN retries (27 s worst case at 200).
+    request_queue_size = 256
+    daemon_threads = True
+
+
 def main():
     parser = argparse.ArgumentParser(description="procfit development server")
     parser.add_argument("--root", default=os.path.join(os.path.dirname(__file__), ".."))
@@ -130,7 +143,7 @@ def main():
     Handler.root = os.path.realpath(args.root)
     Handler.isolation = not args.no_isolation
     try:
-        server = http.server.ThreadingHTTPServer(("127.0.0.1", args.port), Handler)
+        server = Server(("127.0.0.1", args.port), Handler)
     except OSError as e:
         if e.errno == errno.EADDRINUSE:
             print(

@@ -80,6 +80,52 @@ check('/a.js%00.html', 403);
 check('/link-out.txt', 403);
 check('/dir-out/secret.txt', 403);
 
+/** A raw request with any method, path and extra header lines. */
+function raw(method, path, headers = {}) {
+  const { port } = new URL(server.url);
+  return new Promise((resolve, reject) => {
+    const req = http.request({ host: '127.0.0.1', port, path, method, headers }, (res) => {
+      res.resume();
+      res.on('end', () => resolve({ status: res.statusCode, headers: res.headers }));
+    });
+    req.on('error', reject);
+    req.end();
+  });
+}
+
+// Issue 19: http.server's own error replies lacked COOP/COEP.
+for (const [name, args, status] of [
+  ['an unknown method', ['BREW', '/'], 501],
+  ['a too-long URI', ['GET', '/' + 'a'.repeat(70000)], 414],
+  ['too many headers', ['GET', '/', Object.fromEntries([...Array(120)].map((_, i) => [`x-h${i}`, 'v']))], 431],
+]) {
+  test(`${name} → ${status}, with the isolation headers`, async () => {
+    const res = await raw(...args);
+    assert.equal(res.status, status);
+    assert.equal(res.headers['cross-origin-opener-policy'], 'same-origin');
+    assert.equal(res.headers['cross-origin-embedder-policy'], 'require-corp');
+  });
+}
+
+// Issue 19: with a listen backlog of 5, 200 concurrent GETs of the wasm took up to 27.6 s.
+test('200 concurrent GETs are all served within 10 s', async () => {
+  const agent = new http.Agent({ keepAlive: false, maxSockets: Infinity });
+  const { port } = new URL(server.url);
+  const started = Date.now();
+  const one = () =>
+    new Promise((resolve, reject) => {
+      const req = http.get({ host: '127.0.0.1', port, path: '/a.wasm', agent }, (res) => {
+        res.resume();
+        res.on('end', () => resolve(res.statusCode));
+      });
+      req.setTimeout(10000, () => req.destroy(new Error('timed out')));
+      req.on('error', reject);
+    });
+  const codes = await Promise.all([...Array(200)].map(one));
+  assert.ok(codes.every((c) => c === 200), `statuses ${[...new Set(codes)]}`);
+  assert.ok(Date.now() - started < 10000);
+});
+
 test('binds loopback only', () => {
   assert.match(server.url, /^http:\/\/127\.0\.0\.1:\d+\/$/);
 });
