@@ -34,11 +34,11 @@ pub struct ReconstructArgs {
     #[arg(long, default_value_t = procfit::reconstruct::FitConfig::default().restarts)]
     restarts: usize,
     /// Quality/speed knob: multiplies every stage's budget.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     quality: f64,
     /// Vertical field of view of every image, radians (default: from the photo's EXIF 35 mm
     /// focal length, else 0.47, a 50 mm lens).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     fov: Option<f64>,
     /// Photos (segmented automatically) or mask images (white or opaque = object), one per
     /// view, all the same size.

@@ -306,3 +306,30 @@ fn a_truncated_jpeg_is_one_line_of_error() {
         );
     }
 }
+
+/// Issue 19: `--quality -1` got clap's "use '-- -1'" tip instead of the range.
+#[test]
+fn a_negative_number_is_a_bad_value_not_a_missing_flag() {
+    fails_with(
+        &[
+            "reconstruct",
+            "www/samples/mug.jpg",
+            "-o",
+            s(&scratch("q.glb")),
+            "--quality",
+            "-1",
+        ],
+        "quality -1 is not in (0, 100]",
+    );
+    fails_with(
+        &[
+            "reconstruct",
+            "www/samples/mug.jpg",
+            "-o",
+            s(&scratch("q.glb")),
+            "--fov",
+            "-0.5",
+        ],
+        "field of view -0.5 rad",
+    );
+}
