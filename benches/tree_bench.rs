@@ -10,62 +10,26 @@
 //! `-- --labels` fits the true label image too; `-- --quick` cuts the GA budget by 4;
 //! `-- NAME …` runs only those cases; `-- --dir DIR` reads another folder.
 
-use procfit::generators::tree::TreeGenerator;
-use procfit::generators::{Generator, Lod};
-use procfit::mask::LabelImage;
-use procfit::tree::bench::{
-    BenchCase, case_dirs, crown_ellipsoid, photo_view_iou, sphere, to_truth_frame,
-};
-use procfit::tree::impostor::{PHOTO_FIT_SIZE, silhouette_iou64, start_photo_fit, tree_view};
-use procfit::tree::labels::{ColorThresholds, labels_from_rgb};
+use procfit::tree::bench::{BenchCase, case_dirs, crown_ellipsoid, fit_case, sphere};
+use procfit::tree::impostor::{PhotoFitOptions, silhouette_iou64};
+use procfit::tree::labels::{ColorThresholds, foliage_problem, photo_labels};
 use std::path::PathBuf;
-use std::time::Instant;
-
-struct Row {
-    similarity: f64,
-    iou64: f64,
-    photo_iou: f64,
-    seconds: f64,
-}
-
-fn fit(case: &BenchCase, labels: &LabelImage, budget: Option<usize>) -> Result<Row, String> {
-    let t = Instant::now();
-    let mut f = start_photo_fit(labels, 1, budget, None).map_err(|e| e.0)?;
-    while !f.session.done() {
-        f.session.step();
-    }
-    let seconds = t.elapsed().as_secs_f64();
-    let result = f.session.result().map_err(|e| e.0)?;
-    let mesh = TreeGenerator
-        .generate(&result.params, Lod::Medium)
-        .map_err(|e| e.to_string())?;
-    let photo_view = f.framing.photo_view().map_err(|e| e.0)?;
-    let base = tree_view(PHOTO_FIT_SIZE, PHOTO_FIT_SIZE, 12.0).map_err(|e| e.0)?;
-    let fit_depth = (base.pose.position - glam::DVec3::new(0.0, 6.0, 0.0)).length();
-    let truth_view = case.view().map_err(|e| e.0)?;
-    let c = &case.camera;
-    let truth_depth =
-        (glam::DVec3::from_array(c.position) - glam::DVec3::from_array(c.target)).length();
-    let moved = to_truth_frame(&mesh, &photo_view, fit_depth, &truth_view, truth_depth);
-    Ok(Row {
-        similarity: result.similarity,
-        iou64: silhouette_iou64(&case.truth, &moved, 128).map_err(|e| e.0)?,
-        photo_iou: photo_view_iou(&mesh, &photo_view, &case.labels).map_err(|e| e.0)?,
-        seconds,
-    })
-}
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let quick = args.iter().any(|a| a == "--quick");
     let with_labels = args.iter().any(|a| a == "--labels");
+    // `--paper`: the paper's fitness alone (no silhouette term), `--no-fov`: the photo's field
+    // of view unknown to the fit; both for before/after comparisons.
+    let paper = args.iter().any(|a| a == "--paper");
+    let no_fov = args.iter().any(|a| a == "--no-fov");
     let mut dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/tree-bench");
     let mut names = Vec::new();
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
             "--dir" => dir = PathBuf::from(it.next().ok_or("--dir needs a folder")?),
-            "--bench" | "--quick" | "--labels" => {}
+            "--bench" | "--quick" | "--labels" | "--paper" | "--no-fov" => {}
             n if !n.starts_with('-') => names.push(n.to_string()),
             _ => {}
         }
@@ -73,7 +37,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let dirs: Vec<_> = case_dirs(&dir)
         .into_iter()
         .filter(|d| {
-            names.is_empty() || names.iter().any(|n| d.file_name().is_some_and(|f| f == n.as_str()))
+            names.is_empty()
+                || names
+                    .iter()
+                    .any(|n| d.file_name().is_some_and(|f| f == n.as_str()))
         })
         .collect();
     if dirs.is_empty() {
@@ -101,13 +68,25 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let ell = silhouette_iou64(&case.truth, &crown_ellipsoid(&case.truth), 128)?;
         let other = silhouette_iou64(&case.truth, &case.other, 128)?;
         let (w, h, px) = &case.photo;
-        let photo_labels = labels_from_rgb(*w, *h, px, 4, &ColorThresholds::default())?;
-        let mut inputs = vec![("photo", photo_labels)];
+        let (from_photo, _) = photo_labels(*w, *h, px, 4, &ColorThresholds::default())?;
+        let mut inputs = vec![("photo", from_photo)];
         if with_labels {
             inputs.push(("true labels", case.labels.clone()));
         }
         for (input, labels) in &inputs {
-            let row = pool.install(|| fit(&case, labels, budget));
+            let row = match foliage_problem(labels) {
+                Some(p) => Err(format!("refused: {p}")),
+                None => {
+                    let mut options = PhotoFitOptions {
+                        fov_y: (!no_fov).then_some(case.camera.fov_y),
+                        ..PhotoFitOptions::default()
+                    };
+                    if paper {
+                        options.silhouette_weight = 0.0;
+                    }
+                    pool.install(|| fit_case(&case, labels, budget, &options))
+                }
+            };
             let c = &case.camera;
             match row {
                 Ok(r) => {
@@ -115,7 +94,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         "| {} | {} | {input} | {:.3} | {:.3} | {:.3} | {:.1} | {sph:.3} | {ell:.3} | {other:.3} |",
                         c.name, c.kind, r.similarity, r.iou64, r.photo_iou, r.seconds
                     );
-                    let v = [r.similarity, r.iou64, r.photo_iou, r.seconds, sph, ell, other];
+                    let v = [
+                        r.similarity,
+                        r.iou64,
+                        r.photo_iou,
+                        r.seconds,
+                        sph,
+                        ell,
+                        other,
+                    ];
                     match sums.iter_mut().find(|s| s.0 == *input) {
                         Some(s) => s.1.push(v),
                         None => sums.push((input.to_string(), vec![v])),
@@ -143,7 +130,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             mean(5),
             mean(6)
         );
-        println!("\n{input}: {above} of {} fitted trees above the sphere\n", rows.len());
+        println!(
+            "\n{input}: {above} of {} fitted trees above the sphere\n",
+            rows.len()
+        );
     }
     Ok(())
 }

@@ -115,7 +115,7 @@ fn photo_to_glb_with_its_camera() {
             .and_then(|x| x.parse().ok())
             .unwrap_or_else(|| panic!("no number after `{after}` in `{said}`"))
     };
-    let (now, before) = (number("similarity "), number("the start's "));
+    let (now, before) = (number("fitness "), number("the start's "));
     assert!(now >= before, "{said}");
     let seed = |p: &PathBuf| {
         procfit::model::Model::from_json(&std::fs::read_to_string(p).expect("json"))
@@ -156,7 +156,7 @@ fn bad_tree_masks_give_one_line_and_failure() {
     check(
         "wood.png",
         &|x, y| if trunk(x, y) { BRANCH } else { 0 },
-        "no leaf",
+        "hardly any foliage",
     );
     fails_with(
         &[

@@ -11,8 +11,11 @@
 //! `cargo bench --bench tree_bench` prints the table; `tests/tree_bench.rs` runs two cases.
 
 use super::TreeError;
+use super::impostor::{PhotoFitOptions, silhouette_iou64, start_photo_fit_with};
 use crate::camera::{CameraPose, View};
 use crate::generators::Mesh;
+use crate::generators::tree::TreeGenerator;
+use crate::generators::{Generator, Lod};
 use crate::mask::LabelImage;
 use crate::render::testmesh::{mesh_from, transformed, uv_sphere};
 use crate::render::{Renderer, Topology};
@@ -55,13 +58,13 @@ pub struct BenchCase {
 
 /// Reads a `PFTB` mesh (see the script's header).
 pub fn read_mesh(path: &Path) -> Result<Mesh, TreeError> {
-    let bytes =
-        std::fs::read(path).map_err(|e| TreeError(format!("{}: {e}", path.display())))?;
+    let bytes = std::fs::read(path).map_err(|e| TreeError(format!("{}: {e}", path.display())))?;
     let bad = || TreeError(format!("{}: not a PFTB mesh", path.display()));
     if bytes.len() < 12 || &bytes[..4] != b"PFTB" {
         return Err(bad());
     }
-    let u32_at = |o: usize| u32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
+    let u32_at =
+        |o: usize| u32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
     let (nv, nt) = (u32_at(4) as usize, u32_at(8) as usize);
     if bytes.len() != 12 + 12 * nv + 12 * nt + nt {
         return Err(bad());
@@ -72,7 +75,13 @@ pub fn read_mesh(path: &Path) -> Result<Mesh, TreeError> {
         .collect();
     let o = 12 + 12 * nv;
     let triangles: Vec<[u32; 3]> = (0..nt)
-        .map(|i| [u32_at(o + 12 * i), u32_at(o + 12 * i + 4), u32_at(o + 12 * i + 8)])
+        .map(|i| {
+            [
+                u32_at(o + 12 * i),
+                u32_at(o + 12 * i + 4),
+                u32_at(o + 12 * i + 8),
+            ]
+        })
         .collect();
     if triangles.iter().flatten().any(|&i| i as usize >= nv) {
         return Err(bad());
@@ -160,7 +169,10 @@ pub fn photo_view_iou(mesh: &Mesh, view: &View, mask: &LabelImage) -> Result<f64
     let cov = r.forward(&topo, &mesh.positions, view)?;
     let (mut inter, mut union) = (0usize, 0usize);
     for (&c, &l) in cov.iter().zip(mask.labels()) {
-        let (a, b) = (c >= 0.5, l != super::BACKGROUND && l != LabelImage::DONT_CARE);
+        let (a, b) = (
+            c >= 0.5,
+            l != super::BACKGROUND && l != LabelImage::DONT_CARE,
+        );
         inter += usize::from(a && b);
         union += usize::from(a || b);
     }
@@ -194,4 +206,51 @@ pub fn crown_ellipsoid(truth: &Mesh) -> Mesh {
         *p = c + *p * h;
     }
     m
+}
+
+/// The scores of one fit of a case.
+#[derive(Clone, Copy, Debug)]
+pub struct BenchScore {
+    /// The paper's similarity (eq. 3) of the fit.
+    pub similarity: f64,
+    /// The paper's IoU-64 against the truth (128², the fit at MEDIUM in the truth's frame).
+    pub iou64: f64,
+    /// The fit through its own photo camera against the photo's object mask.
+    pub photo_iou: f64,
+    /// Wall time of the fit, seconds.
+    pub seconds: f64,
+}
+
+/// Fits `labels` (of the case's photo) as the CLI does, seed 1, with `budget` GA evaluations
+/// (`None`: the default), and scores the result.
+pub fn fit_case(
+    case: &BenchCase,
+    labels: &LabelImage,
+    budget: Option<usize>,
+    options: &PhotoFitOptions,
+) -> Result<BenchScore, String> {
+    let t = std::time::Instant::now();
+    let mut f = start_photo_fit_with(labels, 1, budget, None, options).map_err(|e| e.0)?;
+    while !f.session.done() {
+        f.session.step();
+    }
+    let seconds = t.elapsed().as_secs_f64();
+    let result = f.session.result().map_err(|e| e.0)?;
+    let similarity = f.session.paper_similarity().map_err(|e| e.0)?;
+    let mesh = TreeGenerator
+        .generate(&result.params, Lod::Medium)
+        .map_err(|e| e.to_string())?;
+    let photo_view = f.framing.photo_view().map_err(|e| e.0)?;
+    let base = f.framing.fit_view().map_err(|e| e.0)?;
+    let fit_depth = (base.pose.position - DVec3::new(0.0, 6.0, 0.0)).length();
+    let truth_view = case.view().map_err(|e| e.0)?;
+    let c = &case.camera;
+    let truth_depth = (DVec3::from_array(c.position) - DVec3::from_array(c.target)).length();
+    let moved = to_truth_frame(&mesh, &photo_view, fit_depth, &truth_view, truth_depth);
+    Ok(BenchScore {
+        similarity,
+        iou64: silhouette_iou64(&case.truth, &moved, 128).map_err(|e| e.0)?,
+        photo_iou: photo_view_iou(&mesh, &photo_view, &case.labels).map_err(|e| e.0)?,
+        seconds,
+    })
 }

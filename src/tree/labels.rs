@@ -255,7 +255,9 @@ pub fn labels_adaptive(
             object[i] = opaque(i) && d > 40.0;
         }
     }
-    let rows: Vec<usize> = (0..h).filter(|&y| object[y * w..(y + 1) * w].iter().any(|&o| o)).collect();
+    let rows: Vec<usize> = (0..h)
+        .filter(|&y| object[y * w..(y + 1) * w].iter().any(|&o| o))
+        .collect();
     let mut labels = vec![BACKGROUND; w * h];
     let (Some(&top), Some(&bottom)) = (rows.first(), rows.last()) else {
         return LabelImage::new(width, height, labels);
@@ -290,15 +292,26 @@ pub fn labels_adaptive(
         (0..3).map(|k| ((c[k] - m[k]) / sd[k]).powi(2)).sum::<f64>()
     };
     // Alike: each model's mean lies within the other's spread.
-    let alike = dist(bark.0, leaf) < 3.0 && dist(leaf.0, bark) < 3.0;
+    let alike = dist(bark.0, leaf) < 1.0 && dist(leaf.0, bark) < 1.0;
+    let foot_top = bottom + 1 - (span / 12).max(1);
+    let mut branches = 0;
     for i in 0..w * h {
         if object[i] {
             let c = rgb(i);
             labels[i] = if alike || dist(c, leaf) <= dist(c, bark) {
                 LEAF
             } else {
+                branches += 1;
                 BRANCH
             };
+        }
+    }
+    if branches == 0 {
+        // All alike: the object's foot is where its stem is.
+        for (i, l) in labels.iter_mut().enumerate().skip(foot_top * w) {
+            if object[i] {
+                *l = BRANCH;
+            }
         }
     }
     LabelImage::new(width, height, labels)
