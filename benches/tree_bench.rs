@@ -84,25 +84,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     if paper {
                         options.silhouette_weight = 0.0;
                     }
+                    let t = std::time::Instant::now();
                     pool.install(|| fit_case(&case, labels, budget, &options))
+                        .map(|r| (r, t.elapsed().as_secs_f64()))
                 }
             };
             let c = &case.camera;
             match row {
-                Ok(r) => {
+                Ok((r, seconds)) => {
                     println!(
                         "| {} | {} | {input} | {:.3} | {:.3} | {:.3} | {:.1} | {sph:.3} | {ell:.3} | {other:.3} |",
-                        c.name, c.kind, r.similarity, r.iou64, r.photo_iou, r.seconds
+                        c.name, c.kind, r.similarity, r.iou64, r.photo_iou, seconds
                     );
-                    let v = [
-                        r.similarity,
-                        r.iou64,
-                        r.photo_iou,
-                        r.seconds,
-                        sph,
-                        ell,
-                        other,
-                    ];
+                    let v = [r.similarity, r.iou64, r.photo_iou, seconds, sph, ell, other];
                     match sums.iter_mut().find(|s| s.0 == *input) {
                         Some(s) => s.1.push(v),
                         None => sums.push((input.to_string(), vec![v])),

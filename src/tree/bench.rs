@@ -217,24 +217,20 @@ pub struct BenchScore {
     pub iou64: f64,
     /// The fit through its own photo camera against the photo's object mask.
     pub photo_iou: f64,
-    /// Wall time of the fit, seconds.
-    pub seconds: f64,
 }
 
 /// Fits `labels` (of the case's photo) as the CLI does, seed 1, with `budget` GA evaluations
-/// (`None`: the default), and scores the result.
+/// (`None`: the default), and scores the result (the caller times it).
 pub fn fit_case(
     case: &BenchCase,
     labels: &LabelImage,
     budget: Option<usize>,
     options: &PhotoFitOptions,
 ) -> Result<BenchScore, String> {
-    let t = std::time::Instant::now();
     let mut f = start_photo_fit_with(labels, 1, budget, None, options).map_err(|e| e.0)?;
     while !f.session.done() {
         f.session.step();
     }
-    let seconds = t.elapsed().as_secs_f64();
     let result = f.session.result().map_err(|e| e.0)?;
     let similarity = f.session.paper_similarity().map_err(|e| e.0)?;
     let mesh = TreeGenerator
@@ -251,6 +247,5 @@ pub fn fit_case(
         similarity,
         iou64: silhouette_iou64(&case.truth, &moved, 128).map_err(|e| e.0)?,
         photo_iou: photo_view_iou(&mesh, &photo_view, &case.labels).map_err(|e| e.0)?,
-        seconds,
     })
 }

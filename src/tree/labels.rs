@@ -506,7 +506,7 @@ mod tests {
                     } else {
                         leaf
                     }
-                } else if (30..34).contains(&x) && y >= 40 && y < 60 {
+                } else if (30..34).contains(&x) && (40..60).contains(&y) {
                     [90, 62, 40]
                 } else {
                     [110 + (y as u8), 160 + (y as u8) / 2, 230]
