@@ -425,9 +425,19 @@ fn load_tree_labels(
     let result = if is_labels {
         labels::labels_from_values(w, h, px.chunks_exact(4).map(|p| p[0]).collect())
     } else {
-        labels::labels_from_rgb(w, h, px, 4, &thresholds)
+        labels::photo_labels(w, h, px, 4, &thresholds).map(|(l, note)| {
+            if let Some(n) = note {
+                eprintln!("procfit: {}: {n}", path.display());
+            }
+            l
+        })
     };
-    result.map_err(|e| format!("{}: {e}", path.display()))
+    let labels = result.map_err(|e| format!("{}: {e}", path.display()))?;
+    // Implausible labels are said, not fitted into a leafless stick.
+    if let Some(problem) = labels::foliage_problem(&labels) {
+        return Err(format!("{}: {problem}", path.display()));
+    }
+    Ok(labels)
 }
 
 /// `procfit reconstruct --generator tree`: the tree GA on one image, progress on stderr, the
@@ -443,8 +453,17 @@ fn reconstruct_tree(a: &ReconstructArgs, from: Option<&[f64]>) -> Result<(), Str
     let procfit::tree::impostor::PhotoTreeFit {
         mut session,
         framing,
-    } = procfit::tree::impostor::start_photo_fit(&labels, a.seed, a.budget, from)
-        .map_err(|e| format!("{}: {e}", image.display()))?;
+    } = procfit::tree::impostor::start_photo_fit_with(
+        &labels,
+        a.seed,
+        a.budget,
+        from,
+        &procfit::tree::impostor::PhotoFitOptions {
+            fov_y: a.fov,
+            ..Default::default()
+        },
+    )
+    .map_err(|e| format!("{}: {e}", image.display()))?;
     let start = Instant::now();
     step_with_progress(|| {
         let p = session.step();
@@ -470,13 +489,25 @@ fn reconstruct_tree(a: &ReconstructArgs, from: Option<&[f64]>) -> Result<(), Str
         .start_similarity()
         .map(|s| format!(" (the start's {s:.3})"))
         .unwrap_or_default();
+    let paper = session.paper_similarity().map_err(|e| e.to_string())?;
+    let iou = session.silhouette_iou().map_err(|e| e.to_string())?;
+    let fov = match a.fov {
+        Some(f) => format!("field of view {f:.3} rad"),
+        None => "field of view unknown: the fit assumed its default".into(),
+    };
     println!(
-        "wrote {}: tree fitted to 1 view in {:.1} s, {} evaluations, similarity {:.3}{from}",
+        "wrote {}: tree fitted to 1 view in {:.1} s, {} evaluations, similarity {paper:.3}, \
+         photo-view IoU {iou:.3}, fitness {:.3}{from}, {fov}",
         a.output.display(),
         start.elapsed().as_secs_f64(),
         fit.ga.evaluations,
         fit.similarity
     );
+    if iou < 0.8 {
+        eprintln!(
+            "procfit: the fitted tree covers the photo's tree poorly (photo-view IoU {iou:.2} < 0.80)"
+        );
+    }
     Ok(())
 }
 

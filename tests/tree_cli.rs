@@ -120,7 +120,7 @@ fn photo_to_glb_with_its_camera() {
             .and_then(|x| x.parse().ok())
             .unwrap_or_else(|| panic!("no number after `{after}` in `{said}`"))
     };
-    let (now, before) = (number("similarity "), number("the start's "));
+    let (now, before) = (number("fitness "), number("the start's "));
     assert!(now >= before, "{said}");
     let seed = |p: &PathBuf| {
         procfit::model::Model::from_json(&std::fs::read_to_string(p).expect("json"))
@@ -161,7 +161,7 @@ fn bad_tree_masks_give_one_line_and_failure() {
     check(
         "wood.png",
         &|x, y| if trunk(x, y) { BRANCH } else { 0 },
-        "no leaf",
+        "hardly any foliage",
     );
     fails_with(
         &[
@@ -202,8 +202,10 @@ fn tree_colors_label_an_autumn_photo() {
         a.extend([photo, "-o", glb]);
         a
     };
-    // Default colours: no leaves.
-    fails_with(&args(&[]), "no leaf");
+    // Default colours: hardly any leaves by the rules, so the photo's own colours label it
+    // (issue 14), and the CLI says so.
+    let (_, err) = run_ok(&args(&[]));
+    assert!(err.contains("own colours"), "{err}");
     run_ok(&args(&[
         "--tree-colors",
         r#"{"leafHue":[330,170],"leafMinValue":0.45}"#,

@@ -123,12 +123,30 @@ impl TreeImpostor {
 /// rad). Trees of other heights appear proportionally smaller or larger, so the GA recovers
 /// the height from the image.
 pub fn tree_view(width: u32, height: u32, tree_height: f64) -> Result<View, TreeError> {
+    tree_view_fov(width, height, tree_height, TREE_FOV_Y)
+}
+
+/// The vertical field of view of [`tree_view`], radians: the fit's when the photo's is unknown.
+pub const TREE_FOV_Y: f64 = 0.5;
+
+/// [`tree_view`] with vertical field of view `fov` (radians, in (0.01, 3)): the distance is the
+/// one at which a tree `height` tall fills about 80 % of the image height.
+pub fn tree_view_fov(
+    width: u32,
+    height: u32,
+    tree_height: f64,
+    fov: f64,
+) -> Result<View, TreeError> {
     if !(tree_height.is_finite() && tree_height > 0.0) {
         return Err(TreeError(format!(
             "tree height {tree_height} must be a positive number"
         )));
     }
-    let fov: f64 = 0.5;
+    if !(fov.is_finite() && fov > 0.01 && fov < 3.0) {
+        return Err(TreeError(format!(
+            "field of view {fov} rad is not within 0.01–3"
+        )));
+    }
     let distance = 0.5 * tree_height / 0.8 / (0.5 * fov).tan();
     Ok(View::turntable(
         width,
@@ -165,7 +183,15 @@ pub struct TreeFitConfig {
     /// [`POLISH_BATCH`]: one to three genes changed by `Normal(0, 0.05²)`, the best candidate
     /// kept when it improves).
     pub polish: usize,
+    /// Weight of the silhouette term: the fitness is `(1 − w) · similarity + w · IoU`, where
+    /// the IoU is that of the tree pixels (leaf or branch) of the candidate and the reference,
+    /// so the crown's outline counts next to the paper's stripes. 0 is the paper's fitness;
+    /// photo fits ([`start_photo_fit`]) use [`PHOTO_SILHOUETTE_WEIGHT`].
+    pub silhouette_weight: f64,
 }
+
+/// The silhouette weight of photo fits ([`TreeFitConfig::silhouette_weight`]).
+pub const PHOTO_SILHOUETTE_WEIGHT: f64 = 0.5;
 
 /// Candidates per round of the final local search.
 pub const POLISH_BATCH: usize = 16;
@@ -181,6 +207,7 @@ impl Default for TreeFitConfig {
             fixed_seed: Some(0),
             seed_trials: 32,
             polish: 256,
+            silhouette_weight: 0.0,
         }
     }
 }
@@ -207,6 +234,9 @@ pub struct TreeFit {
 /// Scores genomes: the reference, one impostor per rayon thread, the settings.
 struct Evaluator {
     reference: TreeReference,
+    /// The reference's tree pixels (1), background (0) and don't-care (2), for the
+    /// silhouette term.
+    silhouette: Vec<u8>,
     impostors: Vec<Mutex<TreeImpostor>>,
     cfg: TreeFitConfig,
 }
@@ -244,9 +274,40 @@ impl Evaluator {
             } else {
                 TreeTraits::default()
             };
-            self.reference.similarity(&labels, &traits)
+            let sim = self.reference.similarity(&labels, &traits)?;
+            let w = self.cfg.silhouette_weight;
+            Ok(if w > 0.0 {
+                (1.0 - w) * sim + w * self.silhouette_iou(&labels)
+            } else {
+                sim
+            })
         };
         run().unwrap_or(0.0)
+    }
+
+    /// IoU of the candidate's tree pixels and the reference's (don't-care pixels left out).
+    fn silhouette_iou(&self, labels: &LabelImage) -> f64 {
+        let (mut inter, mut union) = (0usize, 0usize);
+        for (&r, &l) in self.silhouette.iter().zip(labels.labels()) {
+            if r == 2 {
+                continue;
+            }
+            let (a, b) = (r == 1, l == BRANCH || l == LEAF);
+            inter += usize::from(a && b);
+            union += usize::from(a || b);
+        }
+        if union > 0 {
+            inter as f64 / union as f64
+        } else {
+            0.0
+        }
+    }
+
+    /// The paper's similarity (eq. 3) of a genome, without the silhouette term.
+    fn paper_similarity(&self, genome: &[f64], seed: Option<u32>) -> Result<f64, TreeError> {
+        let params = Self::params(genome, seed)?;
+        let labels = self.label_image(&params)?;
+        self.reference.similarity(&labels, &TreeTraits::default())
     }
 }
 
@@ -351,6 +412,21 @@ impl TreeSession {
                 cfg.seed_trials, cfg.polish
             )));
         }
+        if !(0.0..=1.0).contains(&cfg.silhouette_weight) {
+            return Err(TreeError(format!(
+                "silhouette weight {} is not within 0–1",
+                cfg.silhouette_weight
+            )));
+        }
+        let silhouette = reference
+            .labels()
+            .iter()
+            .map(|&l| match l {
+                BRANCH | LEAF => 1,
+                LabelImage::DONT_CARE => 2,
+                _ => 0,
+            })
+            .collect();
         let reference = TreeReference::new(reference, traits, cfg.similarity)?;
         // One impostor per rayon worker (and one for the calling thread): each is locked only
         // by its own thread, so the locks never wait.
@@ -398,6 +474,7 @@ impl TreeSession {
         Ok(TreeSession {
             eval: Evaluator {
                 reference,
+                silhouette,
                 impostors,
                 cfg,
             },
@@ -562,6 +639,19 @@ impl TreeSession {
         }
     }
 
+    /// The paper's similarity (eq. 3, without the silhouette term) of the best tree so far;
+    /// equal to its fitness when [`TreeFitConfig::silhouette_weight`] is 0.
+    pub fn paper_similarity(&self) -> Result<f64, TreeError> {
+        self.eval.paper_similarity(&self.best.genome, self.seed)
+    }
+
+    /// The silhouette IoU (tree pixels, [`TreeFitConfig::silhouette_weight`]) of the best tree
+    /// so far against the reference, in the fit's view.
+    pub fn silhouette_iou(&self) -> Result<f64, TreeError> {
+        let labels = self.eval.label_image(&self.best_params())?;
+        Ok(self.eval.silhouette_iou(&labels))
+    }
+
     /// The best tree so far (the result once done).
     pub fn result(&self) -> Result<TreeFit, TreeError> {
         let mut ga = self.ga.result()?;
@@ -627,9 +717,52 @@ pub fn start_photo_fit(
     budget: Option<usize>,
     start: Option<&[f64]>,
 ) -> Result<PhotoTreeFit, TreeError> {
-    let (reference, framing) = frame_reference_with(labels, PHOTO_FIT_SIZE)?;
-    let view = tree_view(PHOTO_FIT_SIZE, PHOTO_FIT_SIZE, 12.0)?;
-    let mut cfg = TreeFitConfig::default();
+    start_photo_fit_with(labels, seed, budget, start, &PhotoFitOptions::default())
+}
+
+/// What a photo fit may know beyond its labels ([`start_photo_fit_with`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PhotoFitOptions {
+    /// The photo's vertical field of view (radians), when known (`--fov`, EXIF); the fit then
+    /// sees the tree through the photo's perspective. `None`: [`TREE_FOV_Y`] over the tree.
+    pub fov_y: Option<f64>,
+    /// [`TreeFitConfig::silhouette_weight`].
+    pub silhouette_weight: f64,
+}
+
+impl Default for PhotoFitOptions {
+    fn default() -> Self {
+        PhotoFitOptions {
+            fov_y: None,
+            silhouette_weight: PHOTO_SILHOUETTE_WEIGHT,
+        }
+    }
+}
+
+/// [`start_photo_fit`] with the photo's field of view and the silhouette weight.
+pub fn start_photo_fit_with(
+    labels: &LabelImage,
+    seed: u64,
+    budget: Option<usize>,
+    start: Option<&[f64]>,
+    options: &PhotoFitOptions,
+) -> Result<PhotoTreeFit, TreeError> {
+    let (reference, mut framing) = frame_reference_with(labels, PHOTO_FIT_SIZE)?;
+    if let Some(f) = options.fov_y {
+        if !(f.is_finite() && f > 0.01 && f < 3.0) {
+            return Err(TreeError(format!(
+                "field of view {f} rad is not within 0.01–3"
+            )));
+        }
+        // The photo's focal length in reference pixels gives the fit view's field of view.
+        let focal = 0.5 * f64::from(framing.source.1) / (0.5 * f).tan() * framing.scale;
+        framing.fit_fov_y = 2.0 * (0.5 * f64::from(PHOTO_FIT_SIZE) / focal).atan();
+    }
+    let view = framing.fit_view()?;
+    let mut cfg = TreeFitConfig {
+        silhouette_weight: options.silhouette_weight,
+        ..TreeFitConfig::default()
+    };
     cfg.ga.seed = seed;
     if let Some(b) = budget {
         cfg.ga.generations = cfg.ga.generations_for(b);
@@ -673,17 +806,26 @@ pub struct Framing {
     pub foot: (f64, f64),
     /// Reference pixels per photo pixel.
     pub scale: f64,
+    /// Vertical field of view of the fit's view ([`Framing::fit_view`]), radians:
+    /// [`TREE_FOV_Y`] unless the photo's is known.
+    pub fit_fov_y: f64,
 }
 
 impl Framing {
-    /// The camera of the photo: the view [`tree_view`]`(size, size, 12.0)` that the fit sees,
+    /// The view the fit sees the reference through: [`tree_view_fov`]`(size, size, 12.0,
+    /// fit_fov_y)`.
+    pub fn fit_view(&self) -> Result<View, TreeError> {
+        tree_view_fov(self.size, self.size, 12.0, self.fit_fov_y)
+    }
+
+    /// The camera of the photo: the view [`Framing::fit_view`] that the fit sees,
     /// widened or narrowed to the photo's field of view and moved parallel to its image plane
     /// so that the photo's centre is on its axis. Points on the plane through the trunk
     /// (`z = 0`) project onto the photo exactly where the reference put them; points in
     /// front of or behind it are off by their depth over the camera distance (a few per cent
     /// for a crown). glTF cameras have no principal-point offset, hence the shift.
     pub fn photo_view(&self) -> Result<View, TreeError> {
-        let base = tree_view(self.size, self.size, 12.0)?;
+        let base = self.fit_view()?;
         let n = f64::from(self.size);
         let (w, h) = (f64::from(self.source.0), f64::from(self.source.1));
         // The photo's rectangle in reference pixels.
@@ -764,6 +906,7 @@ pub fn frame_reference_with(
         source: (labels.width(), labels.height()),
         foot: (foot_x, (bottom + 1) as f64),
         scale,
+        fit_fov_y: TREE_FOV_Y,
     };
     Ok((LabelImage::new(size, size, out)?, framing))
 }

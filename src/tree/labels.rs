@@ -171,6 +171,181 @@ pub fn labels_from_rgb(
     LabelImage::new(width, height, labels)
 }
 
+/// Share of a tree's pixels that must be leaves for its labels to look like a tree with a
+/// crown ([`foliage_problem`]).
+pub const MIN_LEAF_SHARE: f64 = 0.05;
+
+/// Says what is implausible about tree labels, or `None` when they look like a tree with
+/// foliage: no tree pixel at all, or leaves under [`MIN_LEAF_SHARE`] of the tree's pixels (a
+/// fit would make a leafless stick).
+pub fn foliage_problem(labels: &LabelImage) -> Option<String> {
+    let (mut leaf, mut branch) = (0usize, 0usize);
+    for &l in labels.labels() {
+        leaf += usize::from(l == LEAF);
+        branch += usize::from(l == BRANCH);
+    }
+    if leaf + branch == 0 {
+        return Some("no tree found: no pixel is foliage or bark".into());
+    }
+    let share = leaf as f64 / (leaf + branch) as f64;
+    (share < MIN_LEAF_SHARE).then(|| {
+        format!(
+            "hardly any foliage: {:.1} % of the tree's {} pixels are leaves; set the leaf colours \
+             (--tree-colors, the page's \"Adjust the colours\") or give a label image",
+            100.0 * share,
+            leaf + branch
+        )
+    })
+}
+
+/// Width of the image frame whose colours [`labels_adaptive`] takes as the background.
+const FRAME: usize = 4;
+
+/// Labels a photo of a tree on a plain or sky background by the photo's own colours, for
+/// foliage of any colour (yellow, orange, red, blue-green):
+///
+/// 1. the object is what differs from the background, which is taken row by row from the
+///    image's left and right frame (so a sky gradient stays background);
+/// 2. inside the object, a bark colour model comes from the object's lowest rows (the trunk's
+///    foot) and a foliage model from its upper half (mean and spread per channel);
+/// 3. every object pixel takes the nearer model; when the two models are alike (a bush with
+///    foliage down to the ground), the whole object is foliage.
+///
+/// `pixels` as for [`labels_from_rgb`].
+pub fn labels_adaptive(
+    width: u32,
+    height: u32,
+    pixels: &[u8],
+    channels: usize,
+) -> Result<LabelImage, MaskError> {
+    if channels != 3 && channels != 4 {
+        return Err(MaskError(format!(
+            "{channels} channels a pixel; expected 3 (RGB) or 4 (RGBA)"
+        )));
+    }
+    let (w, h) = (width as usize, height as usize);
+    if pixels.len() != w * h * channels {
+        return Err(MaskError(format!(
+            "{} bytes for a {width}×{height} image with {channels} channels",
+            pixels.len()
+        )));
+    }
+    let rgb = |i: usize| -> [f64; 3] {
+        let p = &pixels[i * channels..i * channels + 3];
+        [f64::from(p[0]), f64::from(p[1]), f64::from(p[2])]
+    };
+    let opaque = |i: usize| channels == 3 || pixels[i * channels + 3] >= 128;
+    let frame = FRAME.min(w / 2).max(1);
+    let mut object = vec![false; w * h];
+    for y in 0..h {
+        let mut bg = [0.0; 3];
+        let mut n = 0.0;
+        for x in (0..frame).chain(w.saturating_sub(frame)..w) {
+            let c = rgb(y * w + x);
+            for k in 0..3 {
+                bg[k] += c[k];
+            }
+            n += 1.0;
+        }
+        let bg = bg.map(|v| v / n);
+        for x in 0..w {
+            let i = y * w + x;
+            let c = rgb(i);
+            let d = (0..3).map(|k| (c[k] - bg[k]).powi(2)).sum::<f64>().sqrt();
+            object[i] = opaque(i) && d > 40.0;
+        }
+    }
+    let rows: Vec<usize> = (0..h)
+        .filter(|&y| object[y * w..(y + 1) * w].iter().any(|&o| o))
+        .collect();
+    let mut labels = vec![BACKGROUND; w * h];
+    let (Some(&top), Some(&bottom)) = (rows.first(), rows.last()) else {
+        return LabelImage::new(width, height, labels);
+    };
+    let span = bottom + 1 - top;
+    let model = |y0: usize, y1: usize| -> Option<([f64; 3], [f64; 3])> {
+        let (mut s, mut s2, mut n) = ([0.0; 3], [0.0; 3], 0.0);
+        for y in y0..y1 {
+            for x in 0..w {
+                if object[y * w + x] {
+                    let c = rgb(y * w + x);
+                    for k in 0..3 {
+                        s[k] += c[k];
+                        s2[k] += c[k] * c[k];
+                    }
+                    n += 1.0;
+                }
+            }
+        }
+        (n > 0.0).then(|| {
+            let m = s.map(|v| v / n);
+            let sd = [0, 1, 2].map(|k| (s2[k] / n - m[k] * m[k]).max(0.0).sqrt().max(8.0));
+            (m, sd)
+        })
+    };
+    let foot = model(bottom + 1 - (span / 12).max(1), bottom + 1);
+    let crown = model(top, top + (span / 2).max(1));
+    let (Some(bark), Some(leaf)) = (foot, crown) else {
+        return LabelImage::new(width, height, labels);
+    };
+    let dist = |c: [f64; 3], (m, sd): ([f64; 3], [f64; 3])| {
+        (0..3).map(|k| ((c[k] - m[k]) / sd[k]).powi(2)).sum::<f64>()
+    };
+    // Alike: each model's mean lies within the other's spread.
+    let alike = dist(bark.0, leaf) < 1.0 && dist(leaf.0, bark) < 1.0;
+    let foot_top = bottom + 1 - (span / 12).max(1);
+    let mut branches = 0;
+    for i in 0..w * h {
+        if object[i] {
+            let c = rgb(i);
+            labels[i] = if alike || dist(c, leaf) <= dist(c, bark) {
+                LEAF
+            } else {
+                branches += 1;
+                BRANCH
+            };
+        }
+    }
+    if branches == 0 {
+        // All alike: the object's foot is where its stem is.
+        for (i, l) in labels.iter_mut().enumerate().skip(foot_top * w) {
+            if object[i] {
+                *l = BRANCH;
+            }
+        }
+    }
+    LabelImage::new(width, height, labels)
+}
+
+/// The labels of a photo as the CLI and the benchmark make them: by the colour rules `t`
+/// ([`labels_from_rgb`]); when those find hardly any foliage ([`foliage_problem`]), by the
+/// photo's own colours ([`labels_adaptive`]) if that finds foliage. The string says which was
+/// used when it was not the rules.
+pub fn photo_labels(
+    width: u32,
+    height: u32,
+    pixels: &[u8],
+    channels: usize,
+    t: &ColorThresholds,
+) -> Result<(LabelImage, Option<String>), MaskError> {
+    let rules = labels_from_rgb(width, height, pixels, channels, t)?;
+    if foliage_problem(&rules).is_none() {
+        return Ok((rules, None));
+    }
+    let adaptive = labels_adaptive(width, height, pixels, channels)?;
+    if foliage_problem(&adaptive).is_none() {
+        return Ok((
+            adaptive,
+            Some(
+                "few pixels have the leaf colours: foliage and bark were told apart by this \
+                 photo's own colours (tree against a plain background)"
+                    .into(),
+            ),
+        ));
+    }
+    Ok((rules, None))
+}
+
 /// A user-supplied label image: every value must be [`BACKGROUND`], [`BRANCH`], [`LEAF`] or
 /// [`LabelImage::DONT_CARE`].
 pub fn labels_from_values(
@@ -315,5 +490,65 @@ mod tests {
         let l = labels_from_values(4, 1, vec![LEAF, BRANCH, LEAF, LEAF]).unwrap();
         let m = apply_mask_codes(&l, &[255, 0, 128, 200]).unwrap();
         assert_eq!(m.labels(), &[LEAF, BACKGROUND, LabelImage::DONT_CARE, LEAF]);
+    }
+
+    /// A synthetic photo: sky gradient, a crown of `leaf` (with a darker shade mixed in) on a
+    /// brown trunk.
+    fn tree_photo(leaf: [u8; 3]) -> (u32, u32, Vec<u8>) {
+        let (w, h) = (64u32, 64u32);
+        let mut px = Vec::new();
+        for y in 0..h {
+            for x in 0..w {
+                let (dx, dy) = (x as f64 - 32.0, y as f64 - 24.0);
+                let c = if dx * dx + dy * dy < 18.0 * 18.0 {
+                    if (x + y) % 3 == 0 {
+                        leaf.map(|v| (f64::from(v) * 0.7) as u8)
+                    } else {
+                        leaf
+                    }
+                } else if (30..34).contains(&x) && (40..60).contains(&y) {
+                    [90, 62, 40]
+                } else {
+                    [110 + (y as u8), 160 + (y as u8) / 2, 230]
+                };
+                px.extend(c);
+            }
+        }
+        (w, h, px)
+    }
+
+    #[test]
+    fn foliage_of_any_colour_is_labelled_by_the_photo() {
+        for (name, leaf) in [
+            ("yellow", [230u8, 200, 40]),
+            ("orange", [230, 120, 30]),
+            ("red", [190, 30, 35]),
+            ("dark green", [25, 70, 30]),
+            ("blue-green", [40, 110, 100]),
+        ] {
+            let (w, h, px) = tree_photo(leaf);
+            let (l, _) = photo_labels(w, h, &px, 3, &ColorThresholds::default()).unwrap();
+            let at = |x: u32, y: u32| l.labels()[(y * w + x) as usize];
+            assert_eq!(at(32, 24), LEAF, "{name}: crown centre");
+            assert_eq!(at(20, 20), LEAF, "{name}: crown");
+            assert_eq!(at(31, 55), BRANCH, "{name}: trunk");
+            assert_eq!(at(2, 2), BACKGROUND, "{name}: sky");
+            assert_eq!(at(60, 60), BACKGROUND, "{name}: sky below");
+            assert!(foliage_problem(&l).is_none(), "{name}");
+        }
+        // The rules alone miss yellow and red foliage: that is what the fallback is for.
+        let (w, h, px) = tree_photo([190, 30, 35]);
+        let rules = labels_from_rgb(w, h, &px, 3, &ColorThresholds::default()).unwrap();
+        assert!(foliage_problem(&rules).is_some());
+    }
+
+    #[test]
+    fn a_tree_without_foliage_is_called_implausible() {
+        let l = labels_from_values(4, 1, vec![BRANCH, BRANCH, BRANCH, BACKGROUND]).unwrap();
+        assert!(foliage_problem(&l).unwrap().contains("hardly any foliage"));
+        let none = labels_from_values(2, 1, vec![BACKGROUND, BACKGROUND]).unwrap();
+        assert!(foliage_problem(&none).unwrap().contains("no tree"));
+        let ok = labels_from_values(3, 1, vec![BRANCH, LEAF, LEAF]).unwrap();
+        assert!(foliage_problem(&ok).is_none());
     }
 }

@@ -10,6 +10,7 @@
 //! Label images use [`BACKGROUND`], [`BRANCH`] and [`LEAF`] (and
 //! [`crate::mask::LabelImage::DONT_CARE`] for pixels that must not count).
 
+pub mod bench;
 pub mod ga;
 pub mod impostor;
 pub mod labels;

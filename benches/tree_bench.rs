@@ -1,0 +1,133 @@
+//! The independent tree benchmark (issue 14), not a test: the tree fit, at its default settings,
+//! on the trees `node scripts/make-tree-bench.mjs` renders with ez-tree into
+//! `target/tree-bench/` (run that first; without it this prints how). Per tree: the paper's
+//! similarity, IoU-64 (128², the fit at MEDIUM moved into the truth's frame through the photo's
+//! two cameras, [`procfit::tree::bench::to_truth_frame`]), the photo-view IoU (the fit through
+//! its own photo camera against the photo's object mask) and wall time on 2 threads; and the
+//! baselines: a sphere, an ellipsoid on the truth's crown box, the same species another seed.
+//!
+//! `cargo bench --bench tree_bench` fits the colour photo (labelled as the CLI does);
+//! `-- --labels` fits the true label image too; `-- --quick` cuts the GA budget by 4;
+//! `-- NAME …` runs only those cases; `-- --dir DIR` reads another folder.
+
+use procfit::tree::bench::{BenchCase, case_dirs, crown_ellipsoid, fit_case, sphere};
+use procfit::tree::impostor::{PhotoFitOptions, silhouette_iou64};
+use procfit::tree::labels::{ColorThresholds, foliage_problem, photo_labels};
+use std::path::PathBuf;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let quick = args.iter().any(|a| a == "--quick");
+    let with_labels = args.iter().any(|a| a == "--labels");
+    // `--paper`: the paper's fitness alone (no silhouette term), `--no-fov`: the photo's field
+    // of view unknown to the fit; both for before/after comparisons.
+    let paper = args.iter().any(|a| a == "--paper");
+    let no_fov = args.iter().any(|a| a == "--no-fov");
+    let mut dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/tree-bench");
+    let mut names = Vec::new();
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "--dir" => dir = PathBuf::from(it.next().ok_or("--dir needs a folder")?),
+            "--bench" | "--quick" | "--labels" | "--paper" | "--no-fov" => {}
+            n if !n.starts_with('-') => names.push(n.to_string()),
+            _ => {}
+        }
+    }
+    let dirs: Vec<_> = case_dirs(&dir)
+        .into_iter()
+        .filter(|d| {
+            names.is_empty()
+                || names
+                    .iter()
+                    .any(|n| d.file_name().is_some_and(|f| f == n.as_str()))
+        })
+        .collect();
+    if dirs.is_empty() {
+        println!(
+            "no tree benchmark cases in {}: run `node scripts/make-tree-bench.mjs` first",
+            dir.display()
+        );
+        return Ok(());
+    }
+    let budget = quick.then(|| procfit::tree::ga::GaConfig::default().evaluations() / 4);
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
+    println!(
+        "## Independent tree benchmark (ez-tree), {} cases, 2 threads{}\n",
+        dirs.len(),
+        if quick { ", quarter budget" } else { "" }
+    );
+    println!(
+        "| tree | kind | input | similarity | IoU-64 | photo-view IoU | seconds | sphere | crown ellipsoid | other seed |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|");
+    let mut sums: Vec<(String, Vec<[f64; 7]>)> = Vec::new();
+    for d in &dirs {
+        let case = BenchCase::load(d)?;
+        let sph = silhouette_iou64(&case.truth, &sphere(), 128)?;
+        let ell = silhouette_iou64(&case.truth, &crown_ellipsoid(&case.truth), 128)?;
+        let other = silhouette_iou64(&case.truth, &case.other, 128)?;
+        let (w, h, px) = &case.photo;
+        let (from_photo, _) = photo_labels(*w, *h, px, 4, &ColorThresholds::default())?;
+        let mut inputs = vec![("photo", from_photo)];
+        if with_labels {
+            inputs.push(("true labels", case.labels.clone()));
+        }
+        for (input, labels) in &inputs {
+            let row = match foliage_problem(labels) {
+                Some(p) => Err(format!("refused: {p}")),
+                None => {
+                    let mut options = PhotoFitOptions {
+                        fov_y: (!no_fov).then_some(case.camera.fov_y),
+                        ..PhotoFitOptions::default()
+                    };
+                    if paper {
+                        options.silhouette_weight = 0.0;
+                    }
+                    let t = std::time::Instant::now();
+                    pool.install(|| fit_case(&case, labels, budget, &options))
+                        .map(|r| (r, t.elapsed().as_secs_f64()))
+                }
+            };
+            let c = &case.camera;
+            match row {
+                Ok((r, seconds)) => {
+                    println!(
+                        "| {} | {} | {input} | {:.3} | {:.3} | {:.3} | {:.1} | {sph:.3} | {ell:.3} | {other:.3} |",
+                        c.name, c.kind, r.similarity, r.iou64, r.photo_iou, seconds
+                    );
+                    let v = [r.similarity, r.iou64, r.photo_iou, seconds, sph, ell, other];
+                    match sums.iter_mut().find(|s| s.0 == *input) {
+                        Some(s) => s.1.push(v),
+                        None => sums.push((input.to_string(), vec![v])),
+                    }
+                }
+                Err(e) => println!(
+                    "| {} | {} | {input} | failed: {e} | 0 | 0 | | {sph:.3} | {ell:.3} | {other:.3} |",
+                    c.name, c.kind
+                ),
+            }
+        }
+    }
+    for (input, rows) in &sums {
+        let n = rows.len() as f64;
+        let mean = |k: usize| rows.iter().map(|r| r[k]).sum::<f64>() / n;
+        let above = rows.iter().filter(|r| r[1] > r[4]).count();
+        println!(
+            "| **mean** ({} fitted) | | {input} | {:.3} | {:.3} | {:.3} | {:.1} | {:.3} | {:.3} | {:.3} |",
+            rows.len(),
+            mean(0),
+            mean(1),
+            mean(2),
+            mean(3),
+            mean(4),
+            mean(5),
+            mean(6)
+        );
+        println!(
+            "\n{input}: {above} of {} fitted trees above the sphere\n",
+            rows.len()
+        );
+    }
+    Ok(())
+}

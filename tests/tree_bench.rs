@@ -1,0 +1,50 @@
+//! The independent tree benchmark in CI (issue 14): two ez-tree trees (a round broadleaf and a
+//! tall narrow aspen), rendered for this test by `scripts/make-tree-bench.mjs` (node, the npm
+//! packages `npm ci` installs, Debian's Chromium; about 10 s), fitted from their colour photos
+//! at a quarter of the default GA budget, must beat the sphere baseline's IoU-64 by
+//! [`MARGIN`]. Measured (`cargo bench --bench tree_bench -- --quick ash-medium aspen-large`):
+//! see ARCHITECTURE.md's tree benchmark numbers.
+
+use procfit::tree::bench::{BenchCase, fit_case, sphere};
+use procfit::tree::impostor::{PhotoFitOptions, silhouette_iou64};
+use procfit::tree::labels::{ColorThresholds, photo_labels};
+use std::path::PathBuf;
+use std::process::Command;
+
+/// How much better than a sphere (IoU-64) each fitted tree must be.
+const MARGIN: f64 = 0.03;
+
+#[test]
+fn fits_beat_the_sphere_on_independent_trees() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let out = std::env::temp_dir().join(format!("procfit-tree-bench-{}", std::process::id()));
+    let names = ["ash-medium", "aspen-large"];
+    let status = Command::new("node")
+        .arg(root.join("scripts/make-tree-bench.mjs"))
+        .arg("--out")
+        .arg(&out)
+        .args(names)
+        .current_dir(&root)
+        .status()
+        .expect("node runs (the benchmark needs Node.js, `npm ci` and /usr/bin/chromium)");
+    assert!(status.success(), "make-tree-bench.mjs failed");
+    let budget = procfit::tree::ga::GaConfig::default().evaluations() / 4;
+    for name in names {
+        let case = BenchCase::load(&out.join(name)).expect("case");
+        let (w, h, px) = &case.photo;
+        let (labels, _) = photo_labels(*w, *h, px, 4, &ColorThresholds::default()).expect("labels");
+        let options = PhotoFitOptions {
+            fov_y: Some(case.camera.fov_y),
+            ..PhotoFitOptions::default()
+        };
+        let score = fit_case(&case, &labels, Some(budget), &options).expect("fits");
+        let sph = silhouette_iou64(&case.truth, &sphere(), 128).expect("iou");
+        println!("{name}: {score:?}, sphere {sph:.3}");
+        assert!(
+            score.iou64 >= sph + MARGIN,
+            "{name}: IoU-64 {:.3}, the sphere's {sph:.3}",
+            score.iou64
+        );
+    }
+    let _ = std::fs::remove_dir_all(&out);
+}
