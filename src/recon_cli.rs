@@ -309,7 +309,7 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
         fov_y,
         ..FitConfig::default()
     };
-    let mut session = Session::new(config, masks).map_err(|e| e.to_string())?;
+    let mut session = Session::new(config, masks.clone()).map_err(|e| e.to_string())?;
     let start = Instant::now();
     step_with_progress(|| {
         let p = session.step();
@@ -349,6 +349,32 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
         result.evaluations,
         result.loss
     );
+    report_photo_match(&result.model, &result.views, &masks, &a.images)
+}
+
+/// Prints how well the fitted model matches each photo (its photo-view IoU) and, when it does
+/// not, a warning saying what to try (issue 16: never a confident wrong answer).
+fn report_photo_match(
+    model: &Model,
+    views: &[procfit::camera::View],
+    masks: &[Mask],
+    paths: &[PathBuf],
+) -> Result<(), String> {
+    let mesh = model
+        .generator
+        .generate(&model.params, model.lod)
+        .map_err(|e| e.to_string())?;
+    let ious = eval::photo_view_ious(&mesh, views, masks).map_err(|e| e.to_string())?;
+    let names: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
+    let each: Vec<String> = ious
+        .iter()
+        .zip(&names)
+        .map(|(iou, n)| format!("{n} {iou:.3}"))
+        .collect();
+    println!("photo-view IoU: {}", each.join(", "));
+    if let Some(w) = eval::photo_match_warning(&ious, &names) {
+        eprintln!("procfit: warning: {w}");
+    }
     Ok(())
 }
 

@@ -74,6 +74,10 @@ fn render_reconstruct_eval_round_trip() {
         err.contains("stage 3/3") && err.contains("ETA"),
         "progress: {err}"
     );
+    assert!(
+        !err.contains("does not match"),
+        "a good fit is not warned about: {err}"
+    );
     let doc = procfit::model::Model::from_json(&std::fs::read_to_string(&params).unwrap()).unwrap();
     assert_eq!(doc.generator.name(), "dish");
     let reference = scratch("ref.glb");
@@ -130,6 +134,7 @@ fn render_reconstruct_eval_round_trip() {
         s(&refit),
     ]);
     assert!(said.contains("dish fitted"), "{said}");
+    assert!(said.contains("photo-view IoU"), "{said}");
     for (args, needle) in [
         (
             vec!["--generator", "building", "--start", s(&params)],
@@ -331,5 +336,46 @@ fn a_negative_number_is_a_bad_value_not_a_missing_flag() {
             "-0.5",
         ],
         "field of view -0.5 rad",
+    );
+}
+
+/// Issue 16: a fit that cannot match its photo was reported as fitted, with nothing else. Now
+/// every fit prints its photo-view IoU, and a poor one gets a warning with what to try: an
+/// L-shaped mask has no lathed (dish) model.
+#[test]
+fn a_fit_reports_how_well_it_matches_the_photo_and_warns_when_poorly() {
+    let l_shape = scratch("l-shape.png");
+    write_png(&l_shape, 160, 160, |x, y| {
+        if (20..140).contains(&y) && (30..130).contains(&x) && (x < 60 || y > 110) {
+            255
+        } else {
+            0
+        }
+    });
+    let out = scratch("l-shape.glb");
+    let (said, err) = run_ok(&[
+        "reconstruct",
+        "--generator",
+        "dish",
+        "--budget",
+        "600",
+        "--quality",
+        "0.3",
+        "--restarts",
+        "1",
+        s(&l_shape),
+        "-o",
+        s(&out),
+    ]);
+    let iou: f64 = said
+        .lines()
+        .find_map(|l| l.strip_prefix("photo-view IoU: "))
+        .and_then(|l| l.rsplit(' ').next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no photo-view IoU in {said}"));
+    assert!(iou < 0.85, "{said}");
+    assert!(
+        err.contains("warning: the model does not match") && err.contains("check the mask"),
+        "{err}"
     );
 }
