@@ -485,9 +485,9 @@ mod tests {
         assert!(Photo::decode(&jpeg, 512).is_ok());
         for keep in [jpeg.len() - 2, jpeg.len() * 95 / 100, jpeg.len() / 2, 700] {
             for decode in [Photo::decode, Photo::decode_full] {
-                let err = decode(&jpeg[..keep], 512)
-                    .err()
-                    .expect("truncated is refused");
+                let Err(err) = decode(&jpeg[..keep], 512) else {
+                    panic!("{keep} bytes: a truncated JPEG was accepted");
+                };
                 assert!(err.to_string().contains("truncated"), "{keep}: {err}");
                 assert_eq!(err.to_string().lines().count(), 1);
             }
