@@ -167,6 +167,7 @@ fn load_view(path: &Path) -> Result<LoadedView, String> {
     let coverage = |v: &[u8]| {
         Mask::new(w, h, v.iter().map(|&c| f32::from(c) / 255.0).collect()).map_err(|e| at(&e))
     };
+    let mut auto = false;
     let mask = if photo.has_alpha() && px.chunks_exact(4).any(|p| p[3] < 128) {
         coverage(&px.chunks_exact(4).map(|p| p[3]).collect::<Vec<_>>())?
     } else if px.chunks_exact(4).all(|p| p[0] == p[1] && p[1] == p[2])
@@ -178,12 +179,19 @@ fn load_view(path: &Path) -> Result<LoadedView, String> {
     {
         coverage(&px.chunks_exact(4).map(|p| p[0]).collect::<Vec<_>>())?
     } else {
+        auto = true;
         let seg = segment::segment_auto(&photo).map_err(|e| at(&e))?;
         for w in &seg.warnings {
             eprintln!("procfit: {}: {w}", path.display());
         }
         seg.mask
     };
+    if !auto {
+        let obj: Vec<bool> = mask.values().iter().map(|&v| v >= 0.5).collect();
+        for warning in segment::mask_warnings(&obj, w as usize, h as usize) {
+            eprintln!("procfit: {}: {warning}", path.display());
+        }
+    }
     let fov = exif_fov(&bytes, mask.width(), mask.height());
     Ok(LoadedView {
         mask,
@@ -436,28 +444,17 @@ fn load_tree_labels(
     let thresholds = match colors {
         None => labels::ColorThresholds::default(),
         Some(text) => {
-            let t: labels::ColorThresholds =
-                serde_json::from_str(text).map_err(|e| format!("--tree-colors: {e}"))?;
-            t.check().map_err(|e| format!("--tree-colors: {e}"))?;
-            t
+            labels::ColorThresholds::from_json(text).map_err(|e| format!("--tree-colors: {e}"))?
         }
     };
     let (_, rgba) = read_image(path)?;
     let (w, h) = rgba.dimensions();
-    let px = rgba.as_raw();
-    let is_labels = px
-        .chunks_exact(4)
-        .all(|p| p[0] == p[1] && p[1] == p[2] && p[3] == 255 && matches!(p[0], 0 | 1 | 2 | 255));
-    let result = if is_labels {
-        labels::labels_from_values(w, h, px.chunks_exact(4).map(|p| p[0]).collect())
-    } else {
-        labels::photo_labels(w, h, px, 4, &thresholds).map(|(l, note)| {
-            if let Some(n) = note {
-                eprintln!("procfit: {}: {n}", path.display());
-            }
-            l
-        })
-    };
+    let result = labels::labels_from_image(w, h, rgba.as_raw(), &thresholds).map(|(l, note)| {
+        if let Some(n) = note {
+            eprintln!("procfit: {}: {n}", path.display());
+        }
+        l
+    });
     let labels = result.map_err(|e| format!("{}: {e}", path.display()))?;
     // Implausible labels are said, not fitted into a leafless stick.
     if let Some(problem) = labels::foliage_problem(&labels) {

@@ -379,3 +379,48 @@ fn a_fit_reports_how_well_it_matches_the_photo_and_warns_when_poorly() {
         "{err}"
     );
 }
+
+/// Issues 15 and 19: a mask that is a small part of the frame, or that touches several sides
+/// of it, is said before the fit (the user may have given a fragment or a cut object).
+#[test]
+fn a_small_or_frame_touching_mask_is_said_before_the_fit() {
+    for (name, f) in [
+        (
+            "tiny-mask.png",
+            (|x, y| {
+                if (70..86).contains(&x) && (60..80).contains(&y) {
+                    255
+                } else {
+                    0
+                }
+            }) as fn(u32, u32) -> u8,
+        ),
+        (
+            "cut-mask.png",
+            |x, y| if x > 80 && y < 100 { 255 } else { 0 },
+        ),
+    ] {
+        let mask = scratch(name);
+        write_png(&mask, 160, 160, f);
+        let out = scratch(&name.replace(".png", ".glb"));
+        let (_, err) = run_ok(&[
+            "reconstruct",
+            "--generator",
+            "dish",
+            "--budget",
+            "100",
+            "--quality",
+            "0.1",
+            "--restarts",
+            "1",
+            s(&mask),
+            "-o",
+            s(&out),
+        ]);
+        let said = err
+            .lines()
+            .position(|l| l.contains("covers only") || l.contains("touches 2 sides"))
+            .unwrap_or_else(|| panic!("{name}: nothing said about the mask in {err}"));
+        assert!(err.lines().nth(said).unwrap().contains(name), "{err}");
+    }
+}

@@ -106,6 +106,9 @@ pub struct Session {
     border_tau: f32,
     /// Sides (top, bottom, left, right) that the object appears to touch.
     touched: [bool; 4],
+    /// Sides the object seems to run off, from the photo's colours (see `frame`); `None` once
+    /// the user has said where the object is (a rectangle, a stroke) or outside automatic mode.
+    crossed: Option<[bool; 4]>,
     fg: Option<Gmm>,
     bg: Option<Gmm>,
     hard: Vec<u8>,
@@ -120,6 +123,7 @@ impl Session {
     /// Automatic segmentation: border background model, then GrabCut iterations.
     pub fn automatic(photo: &Photo, opts: &Options) -> Result<Session, SegmentError> {
         let mut s = Session::prepare(photo, opts)?;
+        s.crossed = Some(super::frame::crossed_sides(&s.colors, s.w, s.h));
         // Hard background: the outermost ring on the sides the object does not touch.
         let (w, h) = (s.w, s.h);
         for x in 0..w {
@@ -206,6 +210,9 @@ impl Session {
         let (w, h) = (self.w, self.h);
         let mut pixels = Vec::new();
         for_stroke_pixels(stroke, w, h, |i| pixels.push(i))?;
+        // The user now says where the object is: the automatic mask's doubt about the frame
+        // no longer applies.
+        self.crossed = None;
         let object = stroke.label == Label::Object;
         let opposite = pixels.iter().filter(|&&i| self.labels[i] != object).count();
         let correction = opposite as f32 >= CORRECTION_SHARE * pixels.len() as f32;
@@ -270,6 +277,7 @@ impl Session {
             border_nll,
             border_tau,
             touched,
+            crossed: None,
             fg: None,
             bg: None,
             hard: vec![NONE; w * h],
@@ -511,6 +519,12 @@ impl Session {
                  (a uniform image, or an object filling the frame)"
                     .to_owned(),
             );
+        } else if frac < super::SMALL_MASK {
+            warnings.push(format!(
+                "the object covers only {:.1} % of the photo: if it is bigger than the mask, \
+                 draw a box around it or paint it with the object brush",
+                100.0 * frac
+            ));
         } else if frac > 0.9 {
             warnings.push("the object seems to fill the whole frame".to_owned());
         }
@@ -520,21 +534,47 @@ impl Session {
                 "the object touches {sides} image borders; the background model may be wrong"
             ));
         }
-        if self.touched.iter().filter(|&&t| t).count() >= 2 {
+        if let Some(w) = self.crossed.and_then(|c| frame_warning(&c, &obj, w, h)) {
+            warnings.push(w);
+        } else if self.touched.iter().filter(|&&t| t).count() >= 2 {
             warnings.push(
                 "the image border is not one background: it differs on two or more sides"
                     .to_owned(),
             );
         }
-        // Confidence: how often the cut agrees with the colour models alone. Close to 1 when
-        // object and background colours separate cleanly.
-        let agree = if self.fg.is_some() {
-            (0..n)
-                .filter(|&i| obj[i] == (self.dfg[i] < self.dbg[i]))
-                .count() as f32
-                / n as f32
-        } else {
-            0.0
+        // Confidence: how often the cut agrees with the colour models alone, near the object
+        // (its box grown by half its size on each side), object and background pixels weighted
+        // equally — so a large, easy background cannot vouch for a doubtful outline.
+        let agree = match (self.fg.is_some(), bbox_of(&obj, w)) {
+            (true, Some(b)) => {
+                let (bw, bh) = ((b.x1 - b.x0) as usize, (b.y1 - b.y0) as usize);
+                let (x0, x1) = (
+                    (b.x0 as usize).saturating_sub(bw / 2),
+                    (b.x1 as usize + bw / 2).min(w),
+                );
+                let (y0, y1) = (
+                    (b.y0 as usize).saturating_sub(bh / 2),
+                    (b.y1 as usize + bh / 2).min(h),
+                );
+                let mut count = [[0usize; 2]; 2];
+                for y in y0..y1 {
+                    for x in x0..x1 {
+                        let i = y * w + x;
+                        let k = usize::from(obj[i]);
+                        count[k][0] += 1;
+                        count[k][1] += usize::from(obj[i] == (self.dfg[i] < self.dbg[i]));
+                    }
+                }
+                let share = |c: [usize; 2]| {
+                    if c[0] == 0 {
+                        1.0
+                    } else {
+                        c[1] as f32 / c[0] as f32
+                    }
+                };
+                0.5 * (share(count[0]) + share(count[1]))
+            }
+            _ => 0.0,
         };
         if self.fg.is_some() && agree < 0.85 && area > 0 {
             warnings.push(format!(
@@ -685,16 +725,68 @@ pub(super) fn bbox_of(obj: &[bool], w: usize) -> Option<BBox> {
     b
 }
 
+/// What to tell the user when the object seems to run off the frame (`crossed`, from the
+/// photo's colours) on two or more sides, or on a side the mask stops short of: the automatic
+/// mask took those borders for background.
+fn frame_warning(crossed: &[bool; 4], obj: &[bool], w: usize, h: usize) -> Option<String> {
+    const NAMES: [&str; 4] = ["top", "bottom", "left", "right"];
+    // Within 1 % of the side counts as reaching it.
+    let (mx, my) = ((w / 100).max(1), (h / 100).max(1));
+    let reaches = |s: usize| match s {
+        0 => (0..my).any(|y| (0..w).any(|x| obj[y * w + x])),
+        1 => (h - my..h).any(|y| (0..w).any(|x| obj[y * w + x])),
+        2 => (0..h).any(|y| (0..mx).any(|x| obj[y * w + x])),
+        _ => (0..h).any(|y| (w - mx..w).any(|x| obj[y * w + x])),
+    };
+    // The mask runs along a side whose colours are the background's: it took background in.
+    let touches = touching(obj, w, h);
+    if let Some(s) = (0..4).find(|&s| touches[s] && !crossed[s]) {
+        return Some(format!(
+            "the mask runs along the photo's {} edge, where the photo looks like background: \
+             it may include background; check the mask and remove what is not the object \
+             with the background brush",
+            NAMES[s]
+        ));
+    }
+    let sides: Vec<usize> = (0..4).filter(|&s| crossed[s]).collect();
+    let short: Vec<&str> = sides
+        .iter()
+        .filter(|&&s| !reaches(s))
+        .map(|&s| NAMES[s])
+        .collect();
+    if sides.len() < 2 && short.is_empty() {
+        return None;
+    }
+    let names: Vec<&str> = sides.iter().map(|&s| NAMES[s]).collect();
+    Some(if short.is_empty() {
+        format!(
+            "the object seems to run off the photo's {} edges or fill the frame: \
+             check the mask, or use a photo with background around the object",
+            names.join(" and ")
+        )
+    } else {
+        format!(
+            "the object seems to run off the photo's {} edge{} but the mask stops short of it, \
+             so the mask may be a fragment: draw a box around the object or paint it with the \
+             object brush, or use a photo with background around the object",
+            short.join(" and "),
+            if short.len() > 1 { "s" } else { "" }
+        )
+    })
+}
+
 /// Number of image sides on which the object covers more than a quarter of the side.
-fn touching_sides(obj: &[bool], w: usize, h: usize) -> usize {
+pub(super) fn touching_sides(obj: &[bool], w: usize, h: usize) -> usize {
+    touching(obj, w, h).iter().filter(|&&t| t).count()
+}
+
+/// The sides (top, bottom, left, right) on which the object covers more than a quarter.
+fn touching(obj: &[bool], w: usize, h: usize) -> [bool; 4] {
     let top = (0..w).filter(|&x| obj[x]).count();
     let bottom = (0..w).filter(|&x| obj[(h - 1) * w + x]).count();
     let left = (0..h).filter(|&y| obj[y * w]).count();
     let right = (0..h).filter(|&y| obj[y * w + w - 1]).count();
-    [(top, w), (bottom, w), (left, h), (right, h)]
-        .iter()
-        .filter(|&&(c, len)| 4 * c > len)
-        .count()
+    [(top, w), (bottom, w), (left, h), (right, h)].map(|(c, len)| 4 * c > len)
 }
 
 /// Calls `f` for every pixel within `radius` of the stroke's polyline.

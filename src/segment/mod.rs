@@ -32,6 +32,7 @@
 
 pub mod bench;
 pub mod decode;
+mod frame;
 pub mod gmm;
 pub mod grabcut;
 pub mod maxflow;
@@ -168,13 +169,7 @@ fn from_levels(
 ) -> Result<Segmentation, SegmentError> {
     let (w, h) = (width as usize, height as usize);
     let obj: Vec<bool> = levels.iter().map(|&a| a >= 128).collect();
-    let mut warnings = Vec::new();
-    let area = obj.iter().filter(|&&o| o).count();
-    if area == 0 {
-        warnings.push("the mask is empty".to_owned());
-    } else if area == obj.len() {
-        warnings.push("the mask covers the whole image".to_owned());
-    }
+    let warnings = mask_warnings(&obj, w, h);
     let mut seg = grabcut::build_segmentation(&obj, w, h, confidence, warnings)?;
     let values: Vec<f32> = seg
         .mask
@@ -195,6 +190,41 @@ fn from_levels(
     }
     Ok(seg)
 }
+
+/// What to tell the user about a given mask (a mask image, a photo's alpha channel): empty,
+/// the whole image, smaller than [`SMALL_MASK`] of the frame, or touching two or more of the
+/// image's sides over more than a quarter of each (an object cut by the frame, or a mask that
+/// took background in). `obj` is the object's pixels, `w`×`h`, row-major.
+pub fn mask_warnings(obj: &[bool], w: usize, h: usize) -> Vec<String> {
+    let mut warnings = Vec::new();
+    let area = obj.iter().filter(|&&o| o).count();
+    if area == 0 {
+        warnings.push("the mask is empty".to_owned());
+        return warnings;
+    }
+    if area == obj.len() {
+        warnings.push("the mask covers the whole image".to_owned());
+        return warnings;
+    }
+    let frac = area as f32 / obj.len() as f32;
+    if frac < SMALL_MASK {
+        warnings.push(format!(
+            "the mask covers only {:.1} % of the image: check that it is the whole object",
+            100.0 * frac
+        ));
+    }
+    let sides = grabcut::touching_sides(obj, w, h);
+    if sides >= 2 {
+        warnings.push(format!(
+            "the mask touches {sides} sides of the image: if the object is cut by the frame, \
+             the model is only fitted to what the photo shows; check the mask"
+        ));
+    }
+    warnings
+}
+
+/// A mask below this share of the frame gets a warning ([`mask_warnings`], automatic masks).
+pub const SMALL_MASK: f32 = 0.03;
 
 /// A user-supplied mask image (any decodable format) for `photo`: white (or opaque, if the
 /// image has transparency) is object, black background, mid grey don't care. It must have the

@@ -51,6 +51,15 @@ impl Default for ColorThresholds {
 }
 
 impl ColorThresholds {
+    /// Colour rules from camelCase JSON (fields left out keep their defaults), checked
+    /// ([`ColorThresholds::check`]).
+    pub fn from_json(text: &str) -> Result<ColorThresholds, MaskError> {
+        let t: ColorThresholds =
+            serde_json::from_str(text).map_err(|e| MaskError(format!("colour rules: {e}")))?;
+        t.check()?;
+        Ok(t)
+    }
+
     /// Errors, in words, on a hue outside `[0, 360]`, a saturation or value outside `[0, 1]`,
     /// a range whose start is above its end (hues excepted: they wrap) or a non-finite number.
     pub fn check(&self) -> Result<(), MaskError> {
@@ -344,6 +353,27 @@ pub fn photo_labels(
         ));
     }
     Ok((rules, None))
+}
+
+/// A tree's label image from decoded RGBA pixels, as the CLI reads an image file: a grey,
+/// opaque image holding only the label values 0, 1, 2 and 255 is taken as labels
+/// ([`labels_from_values`]), anything else as a photo labelled by colour ([`photo_labels`]).
+/// The string says how a photo was labelled when it was not by the rules.
+pub fn labels_from_image(
+    width: u32,
+    height: u32,
+    rgba: &[u8],
+    t: &ColorThresholds,
+) -> Result<(LabelImage, Option<String>), MaskError> {
+    let is_labels = rgba
+        .chunks_exact(4)
+        .all(|p| p[0] == p[1] && p[1] == p[2] && p[3] == 255 && matches!(p[0], 0 | 1 | 2 | 255));
+    if is_labels {
+        let values = rgba.chunks_exact(4).map(|p| p[0]).collect();
+        Ok((labels_from_values(width, height, values)?, None))
+    } else {
+        photo_labels(width, height, rgba, 4, t)
+    }
 }
 
 /// A user-supplied label image: every value must be [`BACKGROUND`], [`BRANCH`], [`LEAF`] or

@@ -1,0 +1,155 @@
+//! Does the object run off the frame? The automatic mask takes the photo's border for
+//! background; when the object crosses the border (it is cut by the frame, or fills it), that
+//! is false, and the cut finds a fragment or nothing. This module looks at each side of the
+//! frame for a long stretch whose colours are none of the background seen at that side's two
+//! ends (nor a blend of them, for gradients), and that continues deep into the image, as an
+//! object's body does and a patterned background's cells do not.
+
+use super::gmm::Rgb;
+
+/// Share of each side's ends taken as that side's background sample.
+const END: f32 = 0.1;
+/// Least colour distance (RGB in 0..1) that counts as "other than the background".
+const MIN_DISTANCE: f32 = 0.08;
+/// A side is crossed when a stretch this long (share of the side) is other than its ends…
+const MIN_RUN: f32 = 0.15;
+/// …and the colour of the stretch's middle stays on the line inward for this share of the
+/// frame's extent perpendicular to the side.
+const DEPTH: f32 = 0.12;
+
+fn dist(a: Rgb, b: Rgb) -> f32 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+fn lerp(a: Rgb, b: Rgb, t: f32) -> Rgb {
+    [
+        a[0] + (b[0] - a[0]) * t,
+        a[1] + (b[1] - a[1]) * t,
+        a[2] + (b[2] - a[2]) * t,
+    ]
+}
+
+fn mean(v: &[Rgb]) -> Rgb {
+    let n = v.len().max(1) as f32;
+    let s = v
+        .iter()
+        .fold([0.0; 3], |s, c| [s[0] + c[0], s[1] + c[1], s[2] + c[2]]);
+    s.map(|x| x / n)
+}
+
+/// The sides (top, bottom, left, right) the object appears to cross, from the photo's colours
+/// (`w`×`h`, row-major).
+pub(super) fn crossed_sides(colors: &[Rgb], w: usize, h: usize) -> [bool; 4] {
+    let depth = (w.min(h) / 40).max(2);
+    let mut out = [false; 4];
+    for (s, crossed) in out.iter_mut().enumerate() {
+        // The side as a profile along it: position t → pixel index at depth d.
+        let (len, inward) = if s < 2 { (w, h) } else { (h, w) };
+        let at = |t: usize, d: usize| -> usize {
+            match s {
+                0 => d * w + t,
+                1 => (h - 1 - d) * w + t,
+                2 => t * w + d,
+                _ => t * w + (w - 1 - d),
+            }
+        };
+        if len < 20 {
+            continue;
+        }
+        let profile: Vec<Rgb> = (0..len)
+            .map(|t| mean(&(0..depth).map(|d| colors[at(t, d)]).collect::<Vec<_>>()))
+            .collect();
+        let e = ((len as f32 * END) as usize).max(2);
+        let (m0, m1) = (mean(&profile[..e]), mean(&profile[len - e..]));
+        let noise = profile[..e]
+            .iter()
+            .map(|c| dist(*c, m0))
+            .chain(profile[len - e..].iter().map(|c| dist(*c, m1)))
+            .fold(0.0f32, f32::max);
+        let thr = (2.0 * noise).max(MIN_DISTANCE);
+        let (c0, c1) = (e as f32 / 2.0, len as f32 - e as f32 / 2.0);
+        let other = |c: Rgb, t: usize| {
+            let k = ((t as f32 - c0) / (c1 - c0)).clamp(0.0, 1.0);
+            dist(c, m0) > thr && dist(c, m1) > thr && dist(c, lerp(m0, m1, k)) > thr
+        };
+        // The longest stretch of "other" positions, gaps of up to 2 % bridged.
+        let gap = (len / 50).max(1);
+        let (mut best, mut start, mut last) = ((0, 0), None::<usize>, 0);
+        for (t, &c) in profile.iter().enumerate().take(len - e).skip(e) {
+            if other(c, t) {
+                let s0 = match start {
+                    Some(s0) if t - last <= gap => s0,
+                    _ => t,
+                };
+                start = Some(s0);
+                last = t;
+                if last + 1 - s0 > best.1 - best.0 {
+                    best = (s0, last + 1);
+                }
+            }
+        }
+        if ((best.1 - best.0) as f32) < MIN_RUN * len as f32 {
+            continue;
+        }
+        // Inward from the stretch's middle: the pixels must stay unlike the side's background
+        // for DEPTH of the frame.
+        let mid = (best.0 + best.1) / 2;
+        let reach = ((inward as f32 * DEPTH) as usize).min(inward);
+        let unlike = (0..reach)
+            .filter(|&d| other(colors[at(mid, d)], mid))
+            .count();
+        *crossed = unlike as f32 >= 0.8 * reach as f32;
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn image(w: usize, h: usize, f: impl Fn(usize, usize) -> Rgb) -> Vec<Rgb> {
+        (0..w * h).map(|i| f(i % w, i / w)).collect()
+    }
+
+    #[test]
+    fn a_framed_object_crosses_nothing() {
+        let img = image(200, 150, |x, y| {
+            if (60..140).contains(&x) && (40..110).contains(&y) {
+                [0.8, 0.2, 0.1]
+            } else {
+                [0.85, 0.85, 0.8]
+            }
+        });
+        assert_eq!(crossed_sides(&img, 200, 150), [false; 4]);
+    }
+
+    #[test]
+    fn a_gradient_background_crosses_nothing() {
+        let img = image(200, 150, |x, y| {
+            let t = y as f32 / 150.0 * 0.6 + x as f32 / 200.0 * 0.2;
+            [0.9 - 0.5 * t, 0.9 - 0.45 * t, 0.95 - 0.3 * t]
+        });
+        assert_eq!(crossed_sides(&img, 200, 150), [false; 4]);
+    }
+
+    #[test]
+    fn an_object_cut_by_the_frame_crosses_those_sides() {
+        let bg = [0.85, 0.85, 0.8];
+        let cut = image(200, 150, |x, y| {
+            if x > 150 && (30..120).contains(&y) {
+                [0.2, 0.3, 0.7]
+            } else {
+                bg
+            }
+        });
+        assert_eq!(crossed_sides(&cut, 200, 150), [false, false, false, true]);
+        let tall = image(200, 150, |x, _| {
+            if (40..160).contains(&x) {
+                [0.2, 0.3, 0.7]
+            } else {
+                bg
+            }
+        });
+        assert_eq!(crossed_sides(&tall, 200, 150), [true, true, false, false]);
+    }
+}
