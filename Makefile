@@ -10,7 +10,7 @@ WASM_DIR := target/wasm
 WASM_FLAGS := --release --lib --target $(WASM_TARGET) --target-dir $(WASM_DIR) \
 	-Z build-std=panic_abort,std
 
-.PHONY: help setup setup-test wasm wasm-st dist serve test lint test-rust test-e2e bench bench-page clean-pkg
+.PHONY: help setup setup-test wasm wasm-st dist serve test lint test-rust test-e2e test-fuzz bench bench-page clean-pkg
 
 help:
 	@echo "make serve   build the wasm and serve the page on http://127.0.0.1:8080/ (PORT=... to change)"
@@ -60,7 +60,20 @@ test-rust:
 test-e2e: dist
 	node --test --test-concurrency=1 tests/e2e/
 
-test: setup-test lint test-rust test-e2e
+# A short libFuzzer run of every target in fuzz/ from its committed corpus (new inputs go to a
+# scratch folder, never into the repository); the long runs are in fuzz/README.md.
+FUZZ_TARGETS := decode_photo mask_image params_json tree_colors import_glb
+FUZZ_RUNS ?= 20000
+test-fuzz: setup-test
+	cd fuzz && cargo +nightly fuzz build -s none
+	for t in $(FUZZ_TARGETS); do \
+	  rm -rf target/fuzz-scratch/$$t && mkdir -p target/fuzz-scratch/$$t && \
+	  (cd fuzz && cargo +nightly fuzz run -s none $$t ../target/fuzz-scratch/$$t corpus/$$t -- \
+	    -runs=$(FUZZ_RUNS) -rss_limit_mb=2048 -timeout=10 \
+	    -artifact_prefix=../target/fuzz-scratch/crash-$$t- 2>&1 | tail -n 3) || exit 1; \
+	done
+
+test: setup-test lint test-rust test-e2e test-fuzz
 
 bench: wasm
 	cargo bench --workspace --locked

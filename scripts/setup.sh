@@ -4,7 +4,8 @@
 #
 #   scripts/setup.sh          build tools: nightly rust-src + wasm32 target, wasm-bindgen-cli
 #                             matching Cargo.lock, npm packages from package-lock.json
-#   scripts/setup.sh --test   the above, plus Debian's chromium for the browser tests
+#   scripts/setup.sh --test   the above, plus Debian's chromium for the browser tests and
+#                             cargo-fuzz for the short fuzz runs
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -60,5 +61,10 @@ if [ "$want_browser" = 1 ] && [ ! -x /usr/bin/chromium ]; then
   say "installing Debian's chromium"
   apt-get update -qq
   DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends chromium >/dev/null
+fi
+# 5. cargo-fuzz for the short fuzz runs of `make test` (libFuzzer, on the nightly toolchain).
+if [ "$want_browser" = 1 ] && ! cargo fuzz --version >/dev/null 2>&1; then
+  say "installing cargo-fuzz; takes a few minutes once"
+  cargo install cargo-fuzz --version 0.13.2 --locked --quiet
 fi
 exit 0
