@@ -65,6 +65,7 @@ test-e2e: dist
 FUZZ_TARGETS := decode_photo mask_image params_json tree_colors import_glb
 FUZZ_RUNS ?= 20000
 test-fuzz: setup-test
+	PROCFIT_WRITE_FUZZ_SEEDS=1 cargo test --locked --test fuzz_corpus --quiet
 	cd fuzz && cargo +nightly fuzz build -s none
 	for t in $(FUZZ_TARGETS); do \
 	  rm -rf target/fuzz-scratch/$$t && mkdir -p target/fuzz-scratch/$$t && \
