@@ -526,13 +526,19 @@ fn reconstruct_tree(a: &ReconstructArgs, from: Option<&[f64]>) -> Result<(), Str
         fit.ga.evaluations,
         fit.similarity
     );
-    if iou < 0.8 {
+    if iou < TREE_MATCH_LEVEL {
         eprintln!(
-            "procfit: the fitted tree covers the photo's tree poorly (photo-view IoU {iou:.2} < 0.80)"
+            "warning: the fitted tree does not match the photo (photo-view IoU {iou:.2} < \
+             {TREE_MATCH_LEVEL:.2}): check the labels (--tree-colors, or give a label image \
+             of 0 background, 1 branch, 2 leaf), choose another kind of object, or use a photo \
+             of one tree against a plain background"
         );
     }
     Ok(())
 }
+
+/// Below this photo-view IoU a fitted tree is said not to match its photo.
+const TREE_MATCH_LEVEL: f64 = 0.8;
 
 /// Writes the GLB (the model and its cameras) to `-o` and the params JSON to `--params-out`.
 fn write_outputs(

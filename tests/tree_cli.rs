@@ -218,3 +218,41 @@ fn tree_colors_label_an_autumn_photo() {
         fails_with(&args(&["--tree-colors", bad]), needle);
     }
 }
+
+/// Issue 19: a tree "fitted" to noise exited 0 at similarity 0.08 without a word. Now either the
+/// labels are refused or the fit says it does not match, with what to try.
+#[test]
+fn a_tree_fitted_to_noise_is_said_not_to_match() {
+    let photo = scratch("noise.png");
+    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    image::RgbImage::from_fn(W, H, |_, _| {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        let b = state.to_le_bytes();
+        image::Rgb([b[0], b[1], b[2]])
+    })
+    .save(&photo)
+    .expect("png");
+    let glb = scratch("noise.glb");
+    let out = cli_support::procfit(&[
+        "reconstruct",
+        "--generator",
+        "tree",
+        "--budget",
+        "200",
+        s(&photo),
+        "-o",
+        s(&glb),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    if out.status.success() {
+        assert!(
+            err.contains("warning: the fitted tree does not match the photo")
+                && err.contains("check the labels"),
+            "{err}"
+        );
+    } else {
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+    }
+}
