@@ -1,3 +1,4 @@
+// @ts-check
 // The mask step: each photo's mask (from the worker's GrabCut session) drawn over the photo,
 // and the tools to correct it — a box around the object, object / background brushes (both
 // re-cut in the worker) and a "don't care" brush (pixels the fit must ignore, kept here and
@@ -128,12 +129,18 @@ export function paintedWindows(photo) {
   return !!photo.windows?.strokes?.some((s) => s.window);
 }
 
-/** Turns the window pixels under a wall-brush `stroke` ({ points: [x, y, …], radius }) into façade. */
-function eraseWindows(codes, width, height, stroke) {
-  const pts = [];
-  for (let i = 0; i + 1 < stroke.points.length; i += 2) pts.push([stroke.points[i], stroke.points[i + 1]]);
-  const paint = strokePixels(width, height, pts, stroke.radius);
-  for (let i = 0; i < codes.length; i += 1) if (paint[4 * i + 3] > 0 && codes[i] === WINDOW) codes[i] = 1;
+/**
+ * `codes` (window labels) with the windows under the wall-brush strokes `erased` made façade,
+ * by the core (segment::windows::erase_windows).
+ * @param {import('./client.js').WorkerClient} client
+ * @param {import('./page.js').Photo} photo
+ * @param {Uint8Array} codes
+ * @param {import('./page.js').WindowStroke[]} erased
+ */
+async function eraseWindows(client, photo, codes, erased) {
+  const copy = codes.slice();
+  const out = await client.call(REQUESTS.MASK_WINDOWS_ERASE, { key: String(photo.id), codes: copy.buffer, erased }, { transfer: [copy.buffer] });
+  return new Uint8Array(out.codes);
 }
 
 /**
@@ -146,7 +153,6 @@ export async function windowsAfterMask(client, photo) {
   const w = photo.windows;
   if (!w?.codes || !photo.mask) return;
   const key = String(photo.id);
-  const { width, height } = photo.mask;
   try {
     if (paintedWindows(photo)) {
       const codes = w.codes.slice();
@@ -155,9 +161,9 @@ export async function windowsAfterMask(client, photo) {
       photo.windowsNote = 'Your painted windows are kept, cut to the corrected mask.';
     } else {
       const out = await client.call(REQUESTS.MASK_WINDOWS_AUTO, { key });
-      const codes = new Uint8Array(out.codes);
       const erased = w.erased ?? [];
-      for (const s of erased) eraseWindows(codes, width, height, s);
+      const found = new Uint8Array(out.codes);
+      const codes = erased.length ? await eraseWindows(client, photo, found, erased) : found;
       photo.windows = { codes, strokes: [], erased };
       photo.windowsNote = 'Windows found again in the corrected mask.';
     }
@@ -172,17 +178,21 @@ function setMask(photo, m) {
   photo.mask = { ...m, codes: new Uint8Array(m.codes), dontCare: dontCare ?? blankCanvas(m.width, m.height) };
 }
 
-/** RGBA pixels of a round-capped stroke along `points` (working pixels), for a local brush. */
-function strokePixels(width, height, points, radius) {
-  const ctx = blankCanvas(width, height).getContext('2d');
-  ctx.strokeStyle = '#000';
+/**
+ * Paints a round-capped brush stroke along `points` (working pixels) in the context's current
+ * stroke style: the one way a brush is drawn, for the don't-care strokes and the stroke in
+ * progress alike. A single point paints a dot.
+ * @param {CanvasRenderingContext2D | OffscreenCanvasRenderingContext2D} ctx
+ * @param {number[][]} points
+ * @param {number} radius
+ */
+function paintStroke(ctx, points, radius) {
   ctx.lineWidth = 2 * radius;
   ctx.lineCap = ctx.lineJoin = 'round';
   ctx.beginPath();
   points.forEach(([x, y], i) => (i ? ctx.lineTo(x, y) : ctx.moveTo(x, y)));
   if (points.length === 1) ctx.lineTo(points[0][0] + 0.01, points[0][1]);
   ctx.stroke();
-  return ctx.getImageData(0, 0, width, height).data;
 }
 
 /** A transparent canvas with its 2D context made (convertToBlob refuses a context-less one). */
@@ -279,12 +289,7 @@ export class MaskEditor {
       if (this.tool === 'dontcare') {
         const ctx = photo.mask.dontCare.getContext('2d');
         ctx.strokeStyle = '#000';
-        ctx.lineWidth = 2 * this.radius();
-        ctx.lineCap = ctx.lineJoin = 'round';
-        ctx.beginPath();
-        drag.points.forEach(([x, y], i) => (i ? ctx.lineTo(x, y) : ctx.moveTo(x, y)));
-        if (drag.points.length === 1) ctx.lineTo(drag.points[0][0] + 0.01, drag.points[0][1]);
-        ctx.stroke();
+        paintStroke(ctx, drag.points, this.radius());
         this.draw();
         this.onChange(photo);
         return;
@@ -300,9 +305,8 @@ export class MaskEditor {
           }
           // Windows found automatically: the wall brush erases them where it paints (and
           // again when they are found again after a mask correction).
-          const codes = photo.windows.codes.slice();
           const erase = { points: stroke.points, radius: stroke.radius };
-          eraseWindows(codes, photo.mask.width, photo.mask.height, erase);
+          const codes = await eraseWindows(this.client, photo, photo.windows.codes, [erase]);
           photo.windows = { codes, strokes: [], erased: [...(photo.windows.erased ?? []), erase] };
           photo.windowsNote = '';
           this.onChange(photo);
@@ -398,11 +402,7 @@ export class MaskEditor {
         ctx.setLineDash([]);
       } else {
         ctx.strokeStyle = { object: 'rgba(40,110,255,0.9)', background: 'rgba(20,20,30,0.8)', dontcare: 'rgba(255,190,0,0.9)', window: 'rgba(0,215,190,0.9)', wall: 'rgba(230,220,200,0.9)' }[this.tool];
-        ctx.lineWidth = 2 * this.radius();
-        ctx.lineCap = ctx.lineJoin = 'round';
-        ctx.beginPath();
-        drag.points.forEach(([x, y], i) => (i ? ctx.lineTo(x, y) : ctx.moveTo(x, y)));
-        ctx.stroke();
+        paintStroke(ctx, drag.points, this.radius());
       }
     }
   }
