@@ -76,15 +76,7 @@ impl MaskSession {
         if !(radius.is_finite() && radius > 0.0) {
             return Err(JsError::new("a stroke needs a positive radius"));
         }
-        let stroke = Stroke {
-            label: if object {
-                Label::Object
-            } else {
-                Label::Background
-            },
-            points: points.chunks_exact(2).map(|p| [p[0], p[1]]).collect(),
-            radius,
-        };
+        let stroke = stroke_of(object, points, radius);
         self.session.add_stroke(&stroke).map_err(js)?;
         self.session.recut().map_err(js)?;
         Ok(())
@@ -167,6 +159,20 @@ impl MaskSession {
     }
 }
 
+/// A stroke from the page's numbers: object (or window) when `object`, else background (or
+/// wall); `points` are `x, y` pairs in working pixels.
+fn stroke_of(object: bool, points: &[f32], radius: f32) -> Stroke {
+    Stroke {
+        label: if object {
+            Label::Object
+        } else {
+            Label::Background
+        },
+        points: points.chunks_exact(2).map(|p| [p[0], p[1]]).collect(),
+        radius,
+    }
+}
+
 /// Strokes from flat arrays: stroke `i` is a window (or object) stroke when `window[i]` is 1 and
 /// a wall (background) one when 0, has `counts[i]` points (`x, y` pairs in `points`, in order)
 /// and radius `radii[i]`, all in working pixels.
@@ -198,15 +204,7 @@ fn strokes_of(
         if n == 0 {
             return Err(JsError::new("a window stroke needs at least one point"));
         }
-        strokes.push(Stroke {
-            label: if kind == 1 {
-                Label::Object
-            } else {
-                Label::Background
-            },
-            points: p.chunks_exact(2).map(|q| [q[0], q[1]]).collect(),
-            radius,
-        });
+        strokes.push(stroke_of(kind == 1, p, radius));
         at += n;
     }
     if 2 * at != points.len() {
