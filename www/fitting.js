@@ -4,7 +4,9 @@
 // and a cancel button, and hands the fitted model to the editor. The worker runs the fit in
 // slices, so the page — and the sliders — stay responsive meanwhile.
 import { REQUESTS } from './protocol.js';
-import { fitCodes, fitWindows, photoPixels, treeColors } from './masking.js';
+import { fitCodes, photoPixels } from './masking.js';
+import { fitWindows } from './window-labels.js';
+import { treeColors } from './tree-labels.js';
 
 /** What each stage does, in words (see reconstruct::session). */
 export const STAGES = {

@@ -3,7 +3,8 @@
 // photo (and the windows that follow it), the mask's state line and the correction tools.
 import { REQUESTS } from './protocol.js';
 import { say } from './ui.js';
-import { MaskEditor, autoMask, reviveMask, windowsAfterMask } from './masking.js';
+import { MaskEditor, autoMask, reviveMask } from './masking.js';
+import { windowsAfterMask } from './window-labels.js';
 import { $, client, state, selectedPhoto } from './page.js';
 import { persist } from './persistence.js';
 import { renderWindowTools } from './windows-ui.js';

@@ -10,11 +10,9 @@
 // automatic mask) so that a worker session made again — after a reload or a worker restart —
 // can replay them; the next correction then builds on all earlier ones.
 //
-// Window labels follow the mask: after each correction, windows found automatically are found
-// again in the new mask (with the wall-brush erasures made on them applied again), and windows
-// painted by hand are kept but clipped to it (`windowsAfterMask`); `photo.windowsNote` says
-// which happened, for the windows line.
+// The window labels themselves live in window-labels.js, the tree labels in tree-labels.js.
 import { REQUESTS } from './protocol.js';
+import { WINDOW, eraseWindows, windowsAfterMask } from './window-labels.js';
 
 /** Overlay colours (RGBA) by mask code: background dimmed, object tinted, unsure in amber. */
 const TINT = {
@@ -25,9 +23,6 @@ const TINT = {
   branch: [150, 90, 40, 200],
   leaf: [40, 200, 60, 170],
 };
-
-/** Window label codes (segment::windows). */
-export const WINDOW = 2;
 
 /**
  * Asks the worker for `photo`'s automatic mask; stores it on the photo. With `keep`, a mask the
@@ -74,103 +69,6 @@ export function photoPixels(photo) {
   const ctx = new OffscreenCanvas(width, height).getContext('2d');
   ctx.drawImage(photo.bitmap, 0, 0, width, height);
   return ctx.getImageData(0, 0, width, height).data.buffer;
-}
-
-/**
- * Changed from the defaults, the colour rules for orange, red and yellow leaves as well as
- * green; dark bark stays bark. The rules sort a tree photo's pixels into leaves and branches:
- * the fields of the core's ColorThresholds (hues in degrees, a range starting above its end
- * wraps through red); the defaults come from the worker (`client.info.treeColors`).
- */
-export const AUTUMN_CHANGE = Object.freeze({ leafHue: [330, 170], leafMinValue: 0.45 });
-
-/** `photo`'s colour rules: its own, or the core's defaults that `client` reported. */
-export function treeColors(client, photo) {
-  return { ...client.info.treeColors, ...(photo.treeColors ?? {}) };
-}
-
-/** Asks the worker for `photo`'s tree labels (branch / leaf by colour, inside the mask). */
-export async function treeLabels(client, photo) {
-  const rgba = photoPixels(photo);
-  const codes = fitCodes(photo).buffer;
-  const { width, height } = photo.mask;
-  const colors = treeColors(client, photo);
-  const t = await client.call(REQUESTS.TREE_LABELS, { width, height, rgba, codes, colors }, { transfer: [rgba, codes] });
-  photo.treeLabels = new Uint8Array(t.labels);
-  return photo.treeLabels;
-}
-
-/** The window labels for the fit (0 background, 1 façade, 2 window, 255 don't care), or null. */
-export function fitWindows(photo) {
-  const w = photo.windows;
-  if (!w?.codes || !photo.mask || w.codes.length !== photo.mask.codes.length) return null;
-  const out = w.codes.slice();
-  const { width, height, dontCare } = photo.mask;
-  const paint = dontCare.getContext('2d').getImageData(0, 0, width, height).data;
-  for (let i = 0; i < out.length; i += 1) if (paint[4 * i + 3] > 0) out[i] = 255;
-  return out;
-}
-
-/**
- * Finds windows automatically inside `photo`'s mask; stores and returns them. `photo.windows`
- * is { codes, strokes, erased }: `strokes` the windows / wall brush strokes the labels came
- * from (empty when found automatically), `erased` the wall-brush strokes that took windows out
- * of automatic ones (applied again when they are found again).
- */
-export async function detectWindows(client, photo) {
-  const w = await client.call(REQUESTS.MASK_WINDOWS_AUTO, { key: String(photo.id) });
-  photo.windows = { codes: new Uint8Array(w.codes), strokes: [], erased: [] };
-  photo.windowsNote = '';
-  return photo.windows;
-}
-
-/** Whether `photo`'s windows were painted by hand (windows brush), not found automatically. */
-export function paintedWindows(photo) {
-  return !!photo.windows?.strokes?.some((s) => s.window);
-}
-
-/**
- * `codes` (window labels) with the windows under the wall-brush strokes `erased` made façade,
- * by the core (segment::windows::erase_windows).
- * @param {import('./client.js').WorkerClient} client
- * @param {import('./page.js').Photo} photo
- * @param {Uint8Array} codes
- * @param {import('./page.js').WindowStroke[]} erased
- */
-async function eraseWindows(client, photo, codes, erased) {
-  const copy = codes.slice();
-  const out = await client.call(REQUESTS.MASK_WINDOWS_ERASE, { key: String(photo.id), codes: copy.buffer, erased }, { transfer: [copy.buffer] });
-  return new Uint8Array(out.codes);
-}
-
-/**
- * Makes `photo`'s window labels fit its mask again after the mask changed: windows found
- * automatically are found again (and the wall-brush erasures made on them applied again);
- * painted ones are kept, clipped to the new object. Sets `photo.windowsNote` to say so; when
- * that fails, the windows are cleared and the note says why. Does nothing without windows.
- */
-export async function windowsAfterMask(client, photo) {
-  const w = photo.windows;
-  if (!w?.codes || !photo.mask) return;
-  const key = String(photo.id);
-  try {
-    if (paintedWindows(photo)) {
-      const codes = w.codes.slice();
-      const out = await client.call(REQUESTS.MASK_WINDOWS_CLIP, { key, codes: codes.buffer }, { transfer: [codes.buffer] });
-      photo.windows = { ...w, codes: new Uint8Array(out.codes) };
-      photo.windowsNote = 'Your painted windows are kept, cut to the corrected mask.';
-    } else {
-      const out = await client.call(REQUESTS.MASK_WINDOWS_AUTO, { key });
-      const erased = w.erased ?? [];
-      const found = new Uint8Array(out.codes);
-      const codes = erased.length ? await eraseWindows(client, photo, found, erased) : found;
-      photo.windows = { codes, strokes: [], erased };
-      photo.windowsNote = 'Windows found again in the corrected mask.';
-    }
-  } catch (err) {
-    photo.windows = null;
-    photo.windowsNote = `The windows were cleared with the mask correction: ${err.message}.`;
-  }
 }
 
 function setMask(photo, m) {

@@ -2,7 +2,7 @@
 // The tree labels of the mask step, shown for a generator whose fit reads branch/leaf labels
 // (its spec's `mask_extra` is 'tree_labels'): the labels over the photo with their shares, and
 // "Adjust the colours", the colour rules that sort the photo's pixels into leaves and branches.
-import { treeLabels, treeColors, AUTUMN_CHANGE } from './masking.js';
+import { treeLabels, treeColors, AUTUMN_CHANGE } from './tree-labels.js';
 import { $, client, state, selectedPhoto, specOf, fitGenerator } from './page.js';
 import { persist } from './persistence.js';
 import { maskEditor } from './mask-step.js';

@@ -3,7 +3,7 @@
 // (its spec's `mask_extra` is 'windows'): how much of the object is marked as window, what
 // the last mask correction did to the windows, find them automatically, clear them.
 import { say } from './ui.js';
-import { detectWindows, WINDOW } from './masking.js';
+import { detectWindows, WINDOW } from './window-labels.js';
 import { $, client, selectedPhoto, specOf, fitGenerator } from './page.js';
 import { persist } from './persistence.js';
 import { maskEditor } from './mask-step.js';
