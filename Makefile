@@ -53,6 +53,9 @@ lint: setup
 	cargo clippy --workspace --all-targets --locked -- -D warnings
 	cargo +nightly clippy $(WASM_FLAGS) --features threads -- -D warnings
 	RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --locked --quiet
+	# The page's JavaScript against its JSDoc types (page and worker have different globals).
+	npx --no-install tsc -p tsconfig.json --noEmit --checkJs
+	npx --no-install tsc -p tsconfig.worker.json --noEmit --checkJs
 
 test-rust:
 	cargo test --workspace --locked

@@ -52,30 +52,6 @@ enum Command {
         #[arg(short, long)]
         output: PathBuf,
     },
-    /// Fit the tree generator to a photo (green → leaf, brown/grey → branch) or a label image
-    /// (grey values 0 background, 1 branch, 2 leaf, 255 don't care) with the tree GA.
-    TreeFit {
-        /// Photo or label image (PNG, JPEG, WebP).
-        input: std::path::PathBuf,
-        /// The input is a label image, not a photo.
-        #[arg(long)]
-        labels: bool,
-        /// Side of the square impostors the fit renders.
-        #[arg(long, default_value_t = 128)]
-        size: u32,
-        /// Generations of each elementary GA (40 ≈ 4 700 evaluations).
-        #[arg(long, default_value_t = 40)]
-        generations: usize,
-        /// Seed of the GA.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-        /// Algorithm 3 mutation instead of plain Gaussian (which does better on trees).
-        #[arg(long)]
-        algorithm3: bool,
-        /// Write the fitted params JSON here (default: stdout).
-        #[arg(long)]
-        out: Option<std::path::PathBuf>,
-    },
     /// Recompute the tree generator's Algorithm 3 mutation statistics (src/tree/mutation_stats.json).
     TreeStats {
         /// Where to write the JSON (default: print to stdout).
@@ -111,23 +87,6 @@ fn main() -> ExitCode {
             &output,
         ),
         Command::TreeStats { out } => tree_stats(out.as_deref()),
-        Command::TreeFit {
-            input,
-            labels,
-            size,
-            generations,
-            seed,
-            algorithm3,
-            out,
-        } => tree_fit(
-            &input,
-            labels,
-            size,
-            generations,
-            seed,
-            algorithm3,
-            out.as_deref(),
-        ),
         Command::Reconstruct(args) => recon_cli::reconstruct(&args),
         Command::Render(args) => recon_cli::render(&args),
         Command::Eval(args) => recon_cli::eval(&args),
@@ -194,18 +153,7 @@ fn generate(
             Model::new(generator, &p.values, Lod::Ultra).map_err(|e| e.to_string())?
         }
         (None, Some(path)) => {
-            let text = std::fs::read_to_string(path)
-                .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-            let doc: procfit::model::ParamsDoc = serde_json::from_str(&text)
-                .map_err(|e| format!("{}: params JSON: {e}", path.display()))?;
-            let m = Model::from_doc(&doc).map_err(|e| format!("{}: {e}", path.display()))?;
-            if m.generator.name() != generator {
-                return Err(format!(
-                    "{} holds parameters for `{}`, not `{generator}`",
-                    path.display(),
-                    m.generator.name()
-                ));
-            }
+            let (m, doc) = recon_cli::load_params(path, generator)?;
             // A params file without a lod gets the export level, like the other sources.
             Model {
                 lod: if doc.lod.is_some() { m.lod } else { Lod::Ultra },
@@ -249,59 +197,6 @@ fn tree_stats(out: Option<&std::path::Path>) -> Result<(), String> {
     }
     let stats = procfit::tree::mutation::tree_stats().map_err(|e| e.to_string())?;
     let text = stats.to_json() + "\n";
-    write_or_print(out, &text)
-}
-
-fn tree_fit(
-    input: &std::path::Path,
-    is_labels: bool,
-    size: u32,
-    generations: usize,
-    seed: u64,
-    algorithm3: bool,
-    out: Option<&std::path::Path>,
-) -> Result<(), String> {
-    use procfit::tree::{impostor, labels, mutation::MutationStats, similarity::TreeTraits};
-    if let Some(path) = out {
-        outputs::Outputs::new()
-            .input(input)
-            .output("--out", path)
-            .check()?;
-    }
-    let img = image::open(input).map_err(|e| format!("cannot read {}: {e}", input.display()))?;
-    let (w, h) = (img.width(), img.height());
-    let label_image = if is_labels {
-        labels::labels_from_values(w, h, img.to_luma8().into_raw())
-    } else {
-        labels::labels_from_rgb(
-            w,
-            h,
-            &img.to_rgba8().into_raw(),
-            4,
-            &labels::ColorThresholds::default(),
-        )
-    }
-    .map_err(|e| e.to_string())?;
-    let reference = impostor::frame_reference(&label_image, size).map_err(|e| e.to_string())?;
-    let view = impostor::tree_view(size, size, 12.0).map_err(|e| e.to_string())?;
-    let mut cfg = impostor::TreeFitConfig::default();
-    cfg.ga.generations = generations;
-    cfg.ga.seed = seed;
-    let stats = MutationStats::tree().map_err(|e| e.to_string())?;
-    let mutation = algorithm3.then_some(&stats);
-    eprintln!(
-        "procfit: fitting a tree to {} ({} evaluations)",
-        input.display(),
-        cfg.evaluations()
-    );
-    let fit = impostor::fit_tree(&reference, TreeTraits::default(), view, &cfg, mutation)
-        .map_err(|e| e.to_string())?;
-    eprintln!("procfit: tree similarity {:.3}", fit.similarity);
-    let mut model =
-        procfit::model::Model::new("tree", &fit.params, procfit::generators::Lod::Medium)
-            .map_err(|e| e.to_string())?;
-    model.seed = Some(seed);
-    let text = model.to_json() + "\n";
     write_or_print(out, &text)
 }
 

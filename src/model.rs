@@ -152,6 +152,20 @@ impl Model {
         Model::from_doc(&doc)
     }
 
+    /// The model a file holds: a procfit GLB (told by its `glTF` magic; its scene extras) or
+    /// params JSON text — the one check the CLI's `--start` and the page's "open" share. A GLB
+    /// from another tool, or JSON that is not procfit's, is an error saying so.
+    pub fn from_file_bytes(bytes: &[u8]) -> Result<Model, ModelError> {
+        if bytes.starts_with(b"glTF") {
+            return crate::glb::import_glb(bytes)
+                .and_then(|g| g.model())
+                .map_err(|e| ModelError(e.to_string()));
+        }
+        let text = std::str::from_utf8(bytes)
+            .map_err(|_| ModelError("the file is neither a GLB nor params JSON text".into()))?;
+        Model::from_json(text)
+    }
+
     /// Pretty params JSON.
     pub fn to_json(&self) -> String {
         // Serialising a struct of strings, numbers and maps cannot fail.

@@ -26,14 +26,15 @@ pub struct ReconstructArgs {
     /// Seed of the fit (same seed, same result).
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Stage-1 evaluations (default 5000 × quality; for a tree, the GA's, default 4608).
+    /// Stage-1 evaluations (default 5000 × quality; for a tree, the GA's, default 4608 ×
+    /// quality, 4896 with the seed trials and the local search).
     #[arg(long)]
     budget: Option<usize>,
     /// Whole fits from different seeds, run side by side; the lowest final loss wins (not for
-    /// trees).
-    #[arg(long, default_value_t = procfit::reconstruct::FitConfig::default().restarts)]
-    restarts: usize,
-    /// Quality/speed knob: multiplies every stage's budget.
+    /// trees). Default: 3, or 1 below quality 0.5 (a quick preview), as on the page.
+    #[arg(long)]
+    restarts: Option<usize>,
+    /// Quality/speed knob: multiplies every stage's budget, in (0, 16].
     #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     quality: f64,
     /// Vertical field of view of every image, radians (default: from the photo's EXIF 35 mm
@@ -65,17 +66,8 @@ pub struct ReconstructArgs {
 
 /// The model `--start` names: a params JSON or a procfit GLB.
 fn load_start(path: &Path) -> Result<Model, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-    let model = if bytes.starts_with(b"glTF") {
-        glb::import_glb(&bytes)
-            .and_then(|g| g.model())
-            .map_err(|e| e.to_string())
-    } else {
-        std::str::from_utf8(&bytes)
-            .map_err(|_| "neither a GLB nor params JSON".to_string())
-            .and_then(|t| Model::from_json(t).map_err(|e| e.to_string()))
-    };
-    model.map_err(|e| format!("--start {}: {e}", path.display()))
+    let bytes = read(path)?;
+    Model::from_file_bytes(&bytes).map_err(|e| format!("--start {}: {e}", path.display()))
 }
 
 /// `procfit render`.
@@ -297,8 +289,11 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
         None => a.generator.clone(),
     };
     let start = start.map(|m| m.params);
-    if generator == "tree" {
-        return reconstruct_tree(a, start.as_deref());
+    // How the generator is fitted is its own declaration, not a name check here.
+    if let Some(g) = generators::by_name(&generator)
+        .filter(|g| g.capabilities().fit == Some(generators::FitMethod::TreeGa))
+    {
+        return reconstruct_tree(a, g, start.as_deref());
     }
     if a.tree_colors.is_some() {
         return Err("--tree-colors is for --generator tree".into());
@@ -313,7 +308,9 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
         seed: a.seed,
         quality: a.quality,
         budget: a.budget,
-        restarts: a.restarts,
+        restarts: a
+            .restarts
+            .unwrap_or_else(|| FitConfig::restarts_for_quality(a.quality)),
         fov_y,
         ..FitConfig::default()
     };
@@ -335,7 +332,7 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
     });
     let result = session.result().map_err(|e| e.to_string())?;
     let model = Model {
-        lod: Lod::High,
+        lod: fitted_lod(result.model.generator),
         ..result.model.clone()
     };
     let cameras: Vec<ExportCamera> = result
@@ -358,6 +355,12 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
         result.loss
     );
     report_photo_match(&result.model, &result.views, &masks, &a.images)
+}
+
+/// The level of detail a fit is written at: [`Lod::High`], or the generator's
+/// [`generators::Capabilities::fitted_lod`] when that is finer.
+fn fitted_lod(generator: &dyn generators::Generator) -> Lod {
+    generator.capabilities().fitted_lod.max(Lod::High)
 }
 
 /// Prints how well the fitted model matches each photo (its photo-view IoU) and, when it does
@@ -465,7 +468,11 @@ fn load_tree_labels(
 
 /// `procfit reconstruct --generator tree`: the tree GA on one image, progress on stderr, the
 /// GLB with the photo's camera (and params JSON) out.
-fn reconstruct_tree(a: &ReconstructArgs, from: Option<&[f64]>) -> Result<(), String> {
+fn reconstruct_tree(
+    a: &ReconstructArgs,
+    generator: &'static dyn generators::Generator,
+    from: Option<&[f64]>,
+) -> Result<(), String> {
     let [image] = &a.images[..] else {
         return Err(format!(
             "a tree is fitted to one image, not {}",
@@ -479,7 +486,12 @@ fn reconstruct_tree(a: &ReconstructArgs, from: Option<&[f64]>) -> Result<(), Str
     } = procfit::tree::impostor::start_photo_fit_with(
         &labels,
         a.seed,
-        a.budget,
+        // `--budget` wins; else the core's policy for the quality, as on the page.
+        match a.budget {
+            Some(b) => Some(b),
+            None => procfit::tree::impostor::ga_budget_for_quality(a.quality)
+                .map_err(|e| e.to_string())?,
+        },
         from,
         &procfit::tree::impostor::PhotoFitOptions {
             fov_y: a.fov,
@@ -492,7 +504,7 @@ fn reconstruct_tree(a: &ReconstructArgs, from: Option<&[f64]>) -> Result<(), Str
         let p = session.step();
         Tick {
             done: p.done,
-            name: "tree".into(),
+            name: generator.name().into(),
             stage: p.stage,
             frac: p.evaluations as f64 / p.total_evaluations.max(1) as f64,
             rest: format!(
@@ -502,7 +514,8 @@ fn reconstruct_tree(a: &ReconstructArgs, from: Option<&[f64]>) -> Result<(), Str
         }
     });
     let fit = session.result().map_err(|e| e.to_string())?;
-    let mut model = Model::new("tree", &fit.params, Lod::High).map_err(|e| e.to_string())?;
+    let mut model = Model::new(generator.name(), &fit.params, fitted_lod(generator))
+        .map_err(|e| e.to_string())?;
     model.seed = Some(a.seed);
     let photo_view = framing.photo_view().map_err(|e| e.to_string())?;
     let name = image.file_name().map(|n| n.to_string_lossy().into_owned());
@@ -519,9 +532,10 @@ fn reconstruct_tree(a: &ReconstructArgs, from: Option<&[f64]>) -> Result<(), Str
         None => "field of view unknown: the fit assumed its default".into(),
     };
     println!(
-        "wrote {}: tree fitted to 1 view in {:.1} s, {} evaluations, similarity {paper:.3}, \
+        "wrote {}: {} fitted to 1 view in {:.1} s, {} evaluations, similarity {paper:.3}, \
          photo-view IoU {iou:.3}, fitness {:.3}{from}, {fov}",
         a.output.display(),
+        generator.name(),
         start.elapsed().as_secs_f64(),
         fit.ga.evaluations,
         fit.similarity
@@ -581,21 +595,30 @@ fn model_from(
                 .ok_or_else(|| format!("{generator} has no preset `{name}`"))?;
             Model::new(generator, &p.values, Lod::High).map_err(|e| e.to_string())
         }
-        (None, Some(path)) => {
-            let text = std::fs::read_to_string(path)
-                .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-            let m = Model::from_json(&text).map_err(|e| format!("{}: {e}", path.display()))?;
-            if m.generator.name() != generator {
-                return Err(format!(
-                    "{} holds parameters for `{}`, not `{generator}`",
-                    path.display(),
-                    m.generator.name()
-                ));
-            }
-            Ok(m)
-        }
+        (None, Some(path)) => Ok(load_params(path, generator)?.0),
         (None, None) => Err("give --preset or --params".into()),
     }
+}
+
+/// The params JSON file `path` for `generator` (the CLI's `--params`), and the document as
+/// written (whether it gave a level of detail, say); a file for another generator is an error.
+pub fn load_params(
+    path: &Path,
+    generator: &str,
+) -> Result<(Model, procfit::model::ParamsDoc), String> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let doc: procfit::model::ParamsDoc =
+        serde_json::from_str(&text).map_err(|e| format!("{}: params JSON: {e}", path.display()))?;
+    let m = Model::from_doc(&doc).map_err(|e| format!("{}: {e}", path.display()))?;
+    if m.generator.name() != generator {
+        return Err(format!(
+            "{} holds parameters for `{}`, not `{generator}`",
+            path.display(),
+            m.generator.name()
+        ));
+    }
+    Ok((m, doc))
 }
 
 /// `procfit render`: a silhouette PNG (white object on black).

@@ -715,3 +715,80 @@ fn look_at_points_the_camera_down_its_minus_z_at_the_target() {
     assert!(m.transform_vector3(Vec3::Y).y > 0.0, "image up points up");
     assert_eq!(m.transform_point3(Vec3::ZERO), eye);
 }
+
+#[test]
+fn a_camera_goes_to_18_floats_and_back() {
+    use procfit::glb::{CAMERA_FLOATS, ExportCamera};
+    let c = ExportCamera::look_at(glam::Vec3::new(1.0, 2.0, 3.0), glam::Vec3::ZERO, 0.6, 1.5);
+    let f = c.to_floats();
+    assert_eq!(f.len(), CAMERA_FLOATS);
+    assert_eq!((f[0], f[1]), (0.6, 1.5));
+    assert_eq!(&f[2..], &c.camera_to_world);
+    let back = ExportCamera::from_floats(&f, Some("photo 1".into()));
+    assert_eq!(
+        back,
+        ExportCamera {
+            name: Some("photo 1".into()),
+            ..c
+        }
+    );
+}
+
+#[test]
+fn a_model_file_is_a_procfit_glb_or_params_json() {
+    let m = Model::new(
+        "dish",
+        &generators::by_name("dish").unwrap().defaults(),
+        Lod::Low,
+    )
+    .unwrap();
+    let glb = procfit::glb::export_model(&m, &[]).unwrap();
+    for bytes in [glb, m.to_json().into_bytes()] {
+        let back = Model::from_file_bytes(&bytes).unwrap();
+        assert_eq!(back.to_doc(), m.to_doc());
+    }
+    let e = Model::from_file_bytes(&[0xff, 0xfe, 0x00])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("neither a GLB nor params JSON"), "{e}");
+    let e = Model::from_file_bytes(b"{\"not\": 1}")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("params JSON"), "{e}");
+}
+
+#[test]
+fn generator_specs_serialise_as_the_page_reads_them() {
+    let dish = procfit::generators::by_name("dish").unwrap();
+    let v = serde_json::to_value(dish.params()).unwrap();
+    let first = &v[0];
+    let s = &dish.params()[0];
+    assert_eq!(first["name"], s.name);
+    assert_eq!(first["min"], s.min);
+    assert_eq!(first["default"], s.default);
+    let kinds: Vec<&str> = v
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["kind"].as_str().unwrap())
+        .collect();
+    assert!(
+        kinds
+            .iter()
+            .all(|k| ["continuous", "integer", "boolean", "categorical"].contains(k))
+    );
+    // A categorical parameter carries its choices; the others an empty list.
+    for (p, spec) in v.as_array().unwrap().iter().zip(dish.params()) {
+        let n = match spec.kind {
+            procfit::generators::ParamKind::Categorical(c) => c.len(),
+            _ => 0,
+        };
+        assert_eq!(p["choices"].as_array().unwrap().len(), n, "{}", spec.name);
+    }
+    let preset = serde_json::to_value(&dish.presets()[0]).unwrap();
+    assert_eq!(preset["name"], dish.presets()[0].name);
+    assert_eq!(
+        preset["values"].as_array().unwrap().len(),
+        dish.params().len()
+    );
+}

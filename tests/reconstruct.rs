@@ -175,6 +175,15 @@ fn bad_masks_are_refused_with_a_message() {
         },
         "quality",
     );
+    // Above MAX_QUALITY: the page's limit is the core's, so the CLI has it too.
+    check(
+        vec![ok.clone()],
+        FitConfig {
+            quality: procfit::reconstruct::MAX_QUALITY * 1.5,
+            ..config(1, 1.0)
+        },
+        "is not in (0, 16]",
+    );
     check(
         vec![ok.clone()],
         FitConfig {
@@ -396,4 +405,17 @@ fn defaults_table() {
         let each: Vec<String> = v.iter().map(|x| format!("{x:.3}")).collect();
         println!("| {name} | {:.3} | {} |", mean(v), each.join(" "));
     }
+}
+
+#[test]
+fn a_quick_fit_is_one_run_for_the_page_and_the_cli_alike() {
+    use procfit::reconstruct::{DEFAULT_RESTARTS, QUICK_QUALITY};
+    assert_eq!(FitConfig::restarts_for_quality(0.25), 1);
+    assert_eq!(FitConfig::restarts_for_quality(QUICK_QUALITY * 0.99), 1);
+    assert_eq!(
+        FitConfig::restarts_for_quality(QUICK_QUALITY),
+        DEFAULT_RESTARTS
+    );
+    assert_eq!(FitConfig::restarts_for_quality(3.0), DEFAULT_RESTARTS);
+    assert_eq!(FitConfig::default().restarts, DEFAULT_RESTARTS);
 }

@@ -324,7 +324,7 @@ fn a_negative_number_is_a_bad_value_not_a_missing_flag() {
             "--quality",
             "-1",
         ],
-        "quality -1 is not in (0, 100]",
+        "quality -1 is not in (0, 16]",
     );
     fails_with(
         &[

@@ -1350,4 +1350,43 @@ fn a_photo_cropped_to_its_object_is_flagged() {
             seg.warnings
         );
     }
+
+#[test]
+fn the_wall_brush_erases_windows_and_nothing_else() {
+    use procfit::mask::LabelImage;
+    use procfit::segment::windows::{LABEL_FACADE, erase_windows};
+    // A 20×10 façade with two windows; a stroke over the left one only.
+    let (w, h) = (20u32, 10u32);
+    let mut l = vec![LABEL_FACADE; (w * h) as usize];
+    for y in 3..7 {
+        for x in (2..6).chain(12..16) {
+            l[(y * w + x) as usize] = LABEL_WINDOW;
+        }
+    }
+    l[0] = LABEL_BACKGROUND;
+    l[1] = LabelImage::DONT_CARE;
+    let labels = LabelImage::new(w, h, l.clone()).unwrap();
+    let stroke = Stroke {
+        label: Label::Background,
+        points: vec![[1.0, 5.0], [7.0, 5.0]],
+        radius: 3.0,
+    };
+    let out = erase_windows(&labels, &[stroke]).unwrap();
+    let o = out.labels();
+    for (i, (&before, &after)) in l.iter().zip(o).enumerate() {
+        let x = i as u32 % w;
+        if before == LABEL_WINDOW && x < 10 {
+            assert_eq!(after, LABEL_FACADE, "pixel {i}: the left window stays");
+        } else {
+            assert_eq!(after, before, "pixel {i} changed");
+        }
+    }
+    // Nothing to erase with no strokes; a bad stroke is an error.
+    assert_eq!(erase_windows(&labels, &[]).unwrap(), labels);
+    let bad = Stroke {
+        label: Label::Background,
+        points: vec![],
+        radius: 3.0,
+    };
+    assert!(erase_windows(&labels, &[bad]).is_err());
 }

@@ -176,3 +176,73 @@ fn no_unlicensed_paper_data_in_the_repository() {
         "files that look like the unlicensed paper data: {offenders:#?}"
     );
 }
+
+/// Files under `dir` (recursively) whose name ends with one of `exts`, skipping build output.
+fn files_with(dir: &Path, exts: &[&str]) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let Ok(entries) = fs::read_dir(dir) else {
+        return out;
+    };
+    for entry in entries.flatten() {
+        let path = entry.path();
+        let name = entry.file_name().to_string_lossy().to_string();
+        if ["target", "node_modules", "pkg", "pkg-st", "samples"].contains(&name.as_str()) {
+            continue;
+        }
+        if path.is_dir() {
+            out.extend(files_with(&path, exts));
+        } else if exts.iter().any(|e| name.ends_with(e)) {
+            out.push(path);
+        }
+    }
+    out.sort();
+    out
+}
+
+#[test]
+fn no_generator_name_outside_registration() {
+    // What a generator can do is data in its spec (`Generator::capabilities`); the CLI, the
+    // worker and the page read that and never check a generator's name. A name may appear as a
+    // string literal only in the generators crate (its own file and `all()`), in tests, in
+    // comments, and in these files, each for the reason given.
+    let allowed: &[(&str, &str)] = &[
+        (
+            "src/tree/bench.rs",
+            "`\"tree\"` names the part of the ez-tree benchmark's reference mesh",
+        ),
+        (
+            "www/bench-worker.js",
+            "the wasm benchmark's fixed workloads, (generator, preset) pairs like benches/",
+        ),
+    ];
+    let names: Vec<&str> = procfit::generators::all()
+        .iter()
+        .map(|g| g.name())
+        .collect();
+    assert!(names.len() >= 3, "{names:?}");
+    let mut files = files_with(&root().join("src"), &[".rs"]);
+    files.extend(files_with(&root().join("www"), &[".js"]));
+    files.push(root().join("index.html"));
+    let mut offenders = Vec::new();
+    for path in files {
+        let r = rel(&path);
+        if allowed.iter().any(|(a, _)| *a == r) {
+            continue;
+        }
+        let text = read(&path);
+        // Unit tests may name generators; only the code before them counts.
+        let code = text.split("#[cfg(test)]").next().unwrap_or("");
+        for line in code_lines(code) {
+            for n in &names {
+                let quoted = [format!("\"{n}\""), format!("'{n}'"), format!("`{n}`")];
+                if quoted.iter().any(|q| line.contains(q.as_str())) {
+                    offenders.push(format!("{r}: {line}"));
+                }
+            }
+        }
+    }
+    assert!(
+        offenders.is_empty(),
+        "generator names outside registration (use the spec's capabilities): {offenders:#?}"
+    );
+}

@@ -216,3 +216,23 @@ fn bad_settings_are_refused() {
     assert!(MutationStats::from_samples("x", &[], &[], 16, 0.001, 0).is_err());
     assert!(MutationStats::from_json("{}").is_err());
 }
+
+#[test]
+fn the_default_budget_is_4608_ga_evaluations_and_quality_scales_it() {
+    use procfit::tree::impostor::{MIN_QUALITY_BUDGET, TreeFitConfig, ga_budget_for_quality};
+    // The one true default, said in every doc: the GA's 4 608, the whole fit's 4 896.
+    assert_eq!(GaConfig::default().evaluations(), 4608);
+    assert_eq!(TreeFitConfig::default().evaluations(), 4896);
+    // The policy the page and the CLI share.
+    assert_eq!(ga_budget_for_quality(1.0).unwrap(), None);
+    assert_eq!(ga_budget_for_quality(0.25).unwrap(), Some(1152));
+    assert_eq!(ga_budget_for_quality(3.0).unwrap(), Some(13824));
+    assert_eq!(
+        ga_budget_for_quality(0.01).unwrap(),
+        Some(MIN_QUALITY_BUDGET)
+    );
+    for bad in [0.0, -1.0, 16.5, f64::NAN] {
+        let e = ga_budget_for_quality(bad).unwrap_err().to_string();
+        assert!(e.contains("is not in (0, 16]"), "{bad}: {e}");
+    }
+}

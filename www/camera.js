@@ -1,3 +1,4 @@
+// @ts-check
 // Camera capture for the photos step: a dialog with the live camera (getUserMedia), a shutter
 // that may be pressed several times (several views of the object), a front/back switch when the
 // device has more than one camera, and messages a person can act on when the camera is denied

@@ -1,3 +1,4 @@
+// @ts-check
 // The model editor of the result step: the current generator, parameters and level of detail;
 // sliders grouped as the generator's spec groups them; undo/redo; reset; and the regeneration
 // pump that keeps the 3D view live while a slider moves.
@@ -251,7 +252,7 @@ export class Editor extends EventTarget {
   /** Resolves once every scheduled change is on screen. */
   settled() {
     if (!this.busy && !this.dirty) return Promise.resolve();
-    return new Promise((resolve) => this.addEventListener('idle', () => resolve(), { once: true }));
+    return /** @type {Promise<void>} */ (new Promise((resolve) => this.addEventListener('idle', () => resolve(), { once: true })));
   }
 }
 

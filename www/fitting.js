@@ -1,9 +1,12 @@
+// @ts-check
 // The fit step: sends the photos' masks to the worker's fit, shows its progress (stage names,
 // a progress bar with an ETA, the best outline so far over the first photo, the loss curve)
 // and a cancel button, and hands the fitted model to the editor. The worker runs the fit in
 // slices, so the page — and the sliders — stay responsive meanwhile.
 import { REQUESTS } from './protocol.js';
-import { fitCodes, fitWindows, photoPixels, treeColors } from './masking.js';
+import { fitCodes, photoPixels } from './masking.js';
+import { fitWindows } from './window-labels.js';
+import { treeColors } from './tree-labels.js';
 
 /** What each stage does, in words (see reconstruct::session). */
 export const STAGES = {
@@ -44,11 +47,14 @@ export class FitRunner extends EventTarget {
    * `start` when given (a named generator's; "Refit from here"). Resolves with
    * { cancelled, result, seconds }; rejects with a readable error.
    */
-  async run({ generator, photos, quality, start = null }) {
+  async run({ generator, specs, photos, quality, start = null }) {
     if (this.running) throw new Error('a fit is already running');
-    if (generator === 'tree') return this.runTree({ photo: photos[0], quality, start });
-    // Window labels only mean something to a building fit (or Automatic, which may pick one).
-    const useWindows = generator === 'building' || generator === 'auto';
+    const spec = specs.find((g) => g.name === generator);
+    if (spec?.fit === 'tree_ga') return this.runTree({ generator, photo: photos[0], quality, start });
+    // Window labels only mean something to a generator that reads them (or to Automatic,
+    // when one of the generators it tries does).
+    const readsWindows = (g) => g.mask_extra === 'windows';
+    const useWindows = spec ? readsWindows(spec) : specs.some((g) => g.fit === 'gradients' && readsWindows(g));
     const masks = photos.map((p) => {
       const codes = fitCodes(p);
       const windows = useWindows ? fitWindows(p) : null;
@@ -81,10 +87,10 @@ export class FitRunner extends EventTarget {
   }
 
   /**
-   * Fits the tree generator to `photo`'s colours inside its mask (trees fit one photo), from the
+   * Fits `generator` (fitted by the tree GA) to `photo`'s colours inside its mask (trees fit one photo), from the
    * tree `start` when given (its seed is kept). Resolves like run().
    */
-  async runTree({ photo, quality, start = null }) {
+  async runTree({ generator, photo, quality, start = null }) {
     const { width, height } = photo.mask;
     const rgba = photoPixels(photo);
     const codes = fitCodes(photo).buffer;
@@ -112,7 +118,7 @@ export class FitRunner extends EventTarget {
             if (event !== 'progress') return;
             // The same shape as a silhouette fit's progress, so one drawing path serves both.
             this.progress(
-              { ...data, work_done: data.evaluations, work_total: data.total_evaluations, best_loss: 1 - data.best_similarity, generator: 'tree' },
+              { ...data, work_done: data.evaluations, work_total: data.total_evaluations, best_loss: 1 - data.best_similarity, generator },
               t0,
             );
           },

@@ -1,3 +1,4 @@
+// @ts-check
 // The mask step: each photo's mask (from the worker's GrabCut session) drawn over the photo,
 // and the tools to correct it — a box around the object, object / background brushes (both
 // re-cut in the worker) and a "don't care" brush (pixels the fit must ignore, kept here and
@@ -9,11 +10,9 @@
 // automatic mask) so that a worker session made again — after a reload or a worker restart —
 // can replay them; the next correction then builds on all earlier ones.
 //
-// Window labels follow the mask: after each correction, windows found automatically are found
-// again in the new mask (with the wall-brush erasures made on them applied again), and windows
-// painted by hand are kept but clipped to it (`windowsAfterMask`); `photo.windowsNote` says
-// which happened, for the windows line.
+// The window labels themselves live in window-labels.js, the tree labels in tree-labels.js.
 import { REQUESTS } from './protocol.js';
+import { WINDOW, eraseWindows, windowsAfterMask } from './window-labels.js';
 
 /** Overlay colours (RGBA) by mask code: background dimmed, object tinted, unsure in amber. */
 const TINT = {
@@ -24,9 +23,6 @@ const TINT = {
   branch: [150, 90, 40, 200],
   leaf: [40, 200, 60, 170],
 };
-
-/** Window label codes (segment::windows). */
-export const WINDOW = 2;
 
 /**
  * Asks the worker for `photo`'s automatic mask; stores it on the photo. With `keep`, a mask the
@@ -75,114 +71,26 @@ export function photoPixels(photo) {
   return ctx.getImageData(0, 0, width, height).data.buffer;
 }
 
-/**
- * Changed from the defaults, the colour rules for orange, red and yellow leaves as well as
- * green; dark bark stays bark. The rules sort a tree photo's pixels into leaves and branches:
- * the fields of the core's ColorThresholds (hues in degrees, a range starting above its end
- * wraps through red); the defaults come from the worker (`client.info.treeColors`).
- */
-export const AUTUMN_CHANGE = Object.freeze({ leafHue: [330, 170], leafMinValue: 0.45 });
-
-/** `photo`'s colour rules: its own, or the core's defaults that `client` reported. */
-export function treeColors(client, photo) {
-  return { ...client.info.treeColors, ...(photo.treeColors ?? {}) };
-}
-
-/** Asks the worker for `photo`'s tree labels (branch / leaf by colour, inside the mask). */
-export async function treeLabels(client, photo) {
-  const rgba = photoPixels(photo);
-  const codes = fitCodes(photo).buffer;
-  const { width, height } = photo.mask;
-  const colors = treeColors(client, photo);
-  const t = await client.call(REQUESTS.TREE_LABELS, { width, height, rgba, codes, colors }, { transfer: [rgba, codes] });
-  photo.treeLabels = new Uint8Array(t.labels);
-  return photo.treeLabels;
-}
-
-/** The window labels for the fit (0 background, 1 façade, 2 window, 255 don't care), or null. */
-export function fitWindows(photo) {
-  const w = photo.windows;
-  if (!w?.codes || !photo.mask || w.codes.length !== photo.mask.codes.length) return null;
-  const out = w.codes.slice();
-  const { width, height, dontCare } = photo.mask;
-  const paint = dontCare.getContext('2d').getImageData(0, 0, width, height).data;
-  for (let i = 0; i < out.length; i += 1) if (paint[4 * i + 3] > 0) out[i] = 255;
-  return out;
-}
-
-/**
- * Finds windows automatically inside `photo`'s mask; stores and returns them. `photo.windows`
- * is { codes, strokes, erased }: `strokes` the windows / wall brush strokes the labels came
- * from (empty when found automatically), `erased` the wall-brush strokes that took windows out
- * of automatic ones (applied again when they are found again).
- */
-export async function detectWindows(client, photo) {
-  const w = await client.call(REQUESTS.MASK_WINDOWS_AUTO, { key: String(photo.id) });
-  photo.windows = { codes: new Uint8Array(w.codes), strokes: [], erased: [] };
-  photo.windowsNote = '';
-  return photo.windows;
-}
-
-/** Whether `photo`'s windows were painted by hand (windows brush), not found automatically. */
-export function paintedWindows(photo) {
-  return !!photo.windows?.strokes?.some((s) => s.window);
-}
-
-/** Turns the window pixels under a wall-brush `stroke` ({ points: [x, y, …], radius }) into façade. */
-function eraseWindows(codes, width, height, stroke) {
-  const pts = [];
-  for (let i = 0; i + 1 < stroke.points.length; i += 2) pts.push([stroke.points[i], stroke.points[i + 1]]);
-  const paint = strokePixels(width, height, pts, stroke.radius);
-  for (let i = 0; i < codes.length; i += 1) if (paint[4 * i + 3] > 0 && codes[i] === WINDOW) codes[i] = 1;
-}
-
-/**
- * Makes `photo`'s window labels fit its mask again after the mask changed: windows found
- * automatically are found again (and the wall-brush erasures made on them applied again);
- * painted ones are kept, clipped to the new object. Sets `photo.windowsNote` to say so; when
- * that fails, the windows are cleared and the note says why. Does nothing without windows.
- */
-export async function windowsAfterMask(client, photo) {
-  const w = photo.windows;
-  if (!w?.codes || !photo.mask) return;
-  const key = String(photo.id);
-  const { width, height } = photo.mask;
-  try {
-    if (paintedWindows(photo)) {
-      const codes = w.codes.slice();
-      const out = await client.call(REQUESTS.MASK_WINDOWS_CLIP, { key, codes: codes.buffer }, { transfer: [codes.buffer] });
-      photo.windows = { ...w, codes: new Uint8Array(out.codes) };
-      photo.windowsNote = 'Your painted windows are kept, cut to the corrected mask.';
-    } else {
-      const out = await client.call(REQUESTS.MASK_WINDOWS_AUTO, { key });
-      const codes = new Uint8Array(out.codes);
-      const erased = w.erased ?? [];
-      for (const s of erased) eraseWindows(codes, width, height, s);
-      photo.windows = { codes, strokes: [], erased };
-      photo.windowsNote = 'Windows found again in the corrected mask.';
-    }
-  } catch (err) {
-    photo.windows = null;
-    photo.windowsNote = `The windows were cleared with the mask correction: ${err.message}.`;
-  }
-}
-
 function setMask(photo, m) {
   const dontCare = photo.mask && photo.mask.width === m.width && photo.mask.height === m.height ? photo.mask.dontCare : null;
   photo.mask = { ...m, codes: new Uint8Array(m.codes), dontCare: dontCare ?? blankCanvas(m.width, m.height) };
 }
 
-/** RGBA pixels of a round-capped stroke along `points` (working pixels), for a local brush. */
-function strokePixels(width, height, points, radius) {
-  const ctx = blankCanvas(width, height).getContext('2d');
-  ctx.strokeStyle = '#000';
+/**
+ * Paints a round-capped brush stroke along `points` (working pixels) in the context's current
+ * stroke style: the one way a brush is drawn, for the don't-care strokes and the stroke in
+ * progress alike. A single point paints a dot.
+ * @param {CanvasRenderingContext2D | OffscreenCanvasRenderingContext2D} ctx
+ * @param {number[][]} points
+ * @param {number} radius
+ */
+function paintStroke(ctx, points, radius) {
   ctx.lineWidth = 2 * radius;
   ctx.lineCap = ctx.lineJoin = 'round';
   ctx.beginPath();
   points.forEach(([x, y], i) => (i ? ctx.lineTo(x, y) : ctx.moveTo(x, y)));
   if (points.length === 1) ctx.lineTo(points[0][0] + 0.01, points[0][1]);
   ctx.stroke();
-  return ctx.getImageData(0, 0, width, height).data;
 }
 
 /** A transparent canvas with its 2D context made (convertToBlob refuses a context-less one). */
@@ -279,12 +187,7 @@ export class MaskEditor {
       if (this.tool === 'dontcare') {
         const ctx = photo.mask.dontCare.getContext('2d');
         ctx.strokeStyle = '#000';
-        ctx.lineWidth = 2 * this.radius();
-        ctx.lineCap = ctx.lineJoin = 'round';
-        ctx.beginPath();
-        drag.points.forEach(([x, y], i) => (i ? ctx.lineTo(x, y) : ctx.moveTo(x, y)));
-        if (drag.points.length === 1) ctx.lineTo(drag.points[0][0] + 0.01, drag.points[0][1]);
-        ctx.stroke();
+        paintStroke(ctx, drag.points, this.radius());
         this.draw();
         this.onChange(photo);
         return;
@@ -300,9 +203,8 @@ export class MaskEditor {
           }
           // Windows found automatically: the wall brush erases them where it paints (and
           // again when they are found again after a mask correction).
-          const codes = photo.windows.codes.slice();
           const erase = { points: stroke.points, radius: stroke.radius };
-          eraseWindows(codes, photo.mask.width, photo.mask.height, erase);
+          const codes = await eraseWindows(this.client, photo, photo.windows.codes, [erase]);
           photo.windows = { codes, strokes: [], erased: [...(photo.windows.erased ?? []), erase] };
           photo.windowsNote = '';
           this.onChange(photo);
@@ -398,11 +300,7 @@ export class MaskEditor {
         ctx.setLineDash([]);
       } else {
         ctx.strokeStyle = { object: 'rgba(40,110,255,0.9)', background: 'rgba(20,20,30,0.8)', dontcare: 'rgba(255,190,0,0.9)', window: 'rgba(0,215,190,0.9)', wall: 'rgba(230,220,200,0.9)' }[this.tool];
-        ctx.lineWidth = 2 * this.radius();
-        ctx.lineCap = ctx.lineJoin = 'round';
-        ctx.beginPath();
-        drag.points.forEach(([x, y], i) => (i ? ctx.lineTo(x, y) : ctx.moveTo(x, y)));
-        ctx.stroke();
+        paintStroke(ctx, drag.points, this.radius());
       }
     }
   }

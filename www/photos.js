@@ -1,3 +1,4 @@
+// @ts-check
 // The photos step's data: files from anywhere (picker, drop, paste, camera, samples) become
 // downscaled photos. Decoding and downscaling happen in the browser (createImageBitmap, which
 // applies the EXIF orientation), so wasm only ever sees a modest, upright RGBA image.

@@ -1,3 +1,4 @@
+// @ts-check
 // The one message protocol between the page (main thread) and the wasm worker.
 //
 // Page → worker (a request):   { id, type, payload }
@@ -11,10 +12,12 @@
 // list below is the whole protocol. Binary payloads travel as transferred ArrayBuffers (the
 // sender gives up its copy), never as arrays of numbers.
 export const REQUESTS = Object.freeze({
-  PING: 'sys/ping', //             → { version, threads, threaded }
+  PING: 'sys/ping', //             → ReadyInfo
   THREAD_PROBE: 'sys/threadProbe', // { jobs } → { threads } distinct pool threads that ran jobs
   DEBUG_PANIC: 'sys/debugPanic', // → never answers ok: panics inside wasm, for the error test
-  GENERATOR_SPECS: 'gen/specs', // → [{ name, label, version, differentiable, params, presets }]
+  // → [{ name, label, version, differentiable, fit: 'gradients' | 'tree_ga' | null, display_name,
+  //      fitted_lod: 0..3, mask_extra: 'none' | 'windows' | 'tree_labels', params, presets }]
+  GENERATOR_SPECS: 'gen/specs',
   // { generator, params: number[], lod: 0..3, cameras?: number[] } → { glb: ArrayBuffer, ms }:
   // the model's mesh as the very GLB the page downloads (the viewer loads these bytes), with one
   // camera node per photo (`cameras`: 18 numbers each — yfov, aspect, camera-to-world matrix
@@ -44,6 +47,10 @@ export const REQUESTS = Object.freeze({
   // the current mask: windows outside the object dropped, the rest kept (painted windows after
   // a mask correction; automatic ones are found again with MASK_WINDOWS_AUTO instead).
   MASK_WINDOWS_CLIP: 'mask/windowsClip',
+  // { key, codes: ArrayBuffer, erased: [{ points: [x, y, …], radius }] } (labels as above) →
+  // labels with the windows under those wall-brush strokes made façade (the core's
+  // segment::windows::erase_windows), for windows found automatically.
+  MASK_WINDOWS_ERASE: 'mask/windowsErase',
   // { bytes: ArrayBuffer } (the original photo file) → { focal_35mm: number | null }: the
   // EXIF 35 mm-equivalent focal length, read before the page's downscaling drops the EXIF.
   PHOTO_FOCAL: 'photo/focal',
@@ -64,7 +71,7 @@ export const REQUESTS = Object.freeze({
   // 1 branch, 2 leaf, 255 don't care), for the preview over the photo.
   TREE_LABELS: 'tree/labels',
   // { fitId, seed, quality, width, height, rgba, codes, start?: number[] } → { cancelled,
-  // result: { generator: 'tree', params, lod, seed, similarity, start_similarity, evaluations,
+  // result: { generator (the tree generator's name), params, lod, seed, similarity, start_similarity, evaluations,
   // cameras } } (`start_similarity`: the start's, undefined without one).
   // `start`: the tree generator's parameters to refit from ("Refit from here"): the fit keeps
   // its `seed` parameter and never returns a tree less similar to the photo. On the way: event
@@ -75,4 +82,39 @@ export const REQUESTS = Object.freeze({
   TREE_RUN: 'tree/run',
 });
 
-export const PROTOCOL_VERSION = 7;
+/**
+ * The protocol's version, bumped when a message changes shape. The worker reports its own in
+ * 'sys/ready' (`protocol`), and the page refuses a worker that speaks another one (an old
+ * worker.js from a cache, say) with a message that says to reload.
+ */
+export const PROTOCOL_VERSION = 8;
+
+/**
+ * An error as it crosses the protocol: `panic` when a trap poisoned the worker.
+ * @typedef {{ message: string, panic: boolean }} WorkerError
+ */
+
+/**
+ * What the worker reports when it is ready (and answers to PING).
+ * @typedef {object} ReadyInfo
+ * @property {string} version the wasm crate's version
+ * @property {number} protocol the worker's PROTOCOL_VERSION
+ * @property {number} threads
+ * @property {boolean} threaded
+ * @property {Record<string, unknown>} treeColors the core's default tree colour rules
+ */
+
+/**
+ * A request, page → worker.
+ * @typedef {{ id: number, type: string, payload?: unknown }} Request
+ */
+
+/**
+ * A message worker → page: an answer to request `id`, a progress frame of it, or unprompted.
+ * @typedef {{ id: number, ok: true, result: any }
+ *   | { id: number, ok: false, error: WorkerError }
+ *   | { id: number, event: string, data: any }
+ *   | { type: 'sys/ready', result: ReadyInfo }
+ *   | { type: 'sys/boot-failed', error: WorkerError }
+ *   | { type: 'sys/poisoned', error: WorkerError }} WorkerMessage
+ */

@@ -1,3 +1,4 @@
+// @ts-check
 // Work is not lost: the session (downscaled photos with their EXIF focal lengths, their masks,
 // the box and strokes that corrected them, don't-care strokes, window labels and tree colours, the model's generator, parameters, level of detail and starting
 // point) is kept in IndexedDB on this device and restored when the page is opened again.

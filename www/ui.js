@@ -1,3 +1,4 @@
+// @ts-check
 // Small DOM helpers shared by the page's modules: element creation, messages a person can act
 // on, and file downloads. No framework: the page is a handful of ES modules.
 

@@ -1,3 +1,4 @@
+// @ts-check
 // The 3D view of the result step: a three.js scene that shows the very GLB the page would
 // download (bytes from the worker, parsed with GLTFLoader), with orbit/zoom, a wireframe toggle
 // and colours per part. It renders on demand (after a load or a camera move), not in a loop, so

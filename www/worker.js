@@ -1,8 +1,9 @@
+// @ts-check
 // The wasm worker: the only place procfit's wasm runs. It loads the module, starts the rayon
 // pool (wasm-bindgen-rayon must never be awaited on the main thread) and answers the requests
 // of www/protocol.js. A panic inside wasm traps the instance: the worker reports it with the
 // panic message and declares itself poisoned, and the page starts a fresh worker.
-import { REQUESTS } from './protocol.js';
+import { REQUESTS, PROTOCOL_VERSION } from './protocol.js';
 
 const early = [];
 let wasm = null;
@@ -12,6 +13,8 @@ self.onmessage = (e) => (wasm ? dispatch(e.data) : early.push(e.data));
 const handlers = {
   [REQUESTS.PING]: () => ({
     version: wasm.version(),
+    // Checked by the page (client.js): a worker of another protocol is refused.
+    protocol: PROTOCOL_VERSION,
     threads: wasm.threaded() ? navigator.hardwareConcurrency : 1,
     threaded: wasm.threaded(),
     // The tree colour rules the page starts from (the core's ColorThresholds::default()).
@@ -70,6 +73,16 @@ const handlers = {
   [REQUESTS.MASK_WINDOWS_CLIP]: ({ key, codes }) => {
     const session = maskSession(key);
     return windowsOut(session, session.clipWindows(new Uint8Array(codes)));
+  },
+  [REQUESTS.MASK_WINDOWS_ERASE]: ({ key, codes, erased = [] }) => {
+    const session = maskSession(key);
+    const labels = session.eraseWindows(
+      new Uint8Array(codes),
+      Uint32Array.from(erased.map((s) => s.points.length / 2)),
+      Float32Array.from(erased.flatMap((s) => s.points)),
+      Float32Array.from(erased.map((s) => s.radius)),
+    );
+    return windowsOut(session, labels);
   },
   [REQUESTS.PHOTO_FOCAL]: ({ bytes }) => {
     const f = wasm.focal35mmFromFile(new Uint8Array(bytes));
@@ -195,12 +208,8 @@ async function stepFit(fitId, session, emit, preview) {
   }
 }
 
-/** The tree GA's evaluations at quality 1 (TreeFitSession's default budget). */
-const TREE_EVALUATIONS = 4700;
-
-/** A tree fit, stepped in slices like runFit. */
+/** A tree fit, stepped in slices like runFit; the core turns `quality` into its budget. */
 async function runTreeFit({ fitId, seed = 1, quality = 1, width, height, rgba, codes, start = [], colors }, emit) {
-  const budget = quality === 1 ? 0 : Math.max(200, Math.round(TREE_EVALUATIONS * quality));
   // The photo's labels under its colour rules: exactly what the mask step shows.
   const labels = wasm.treeLabels(width, height, new Uint8Array(rgba), new Uint8Array(codes ?? 0), colors ?? undefined);
   const session = wasm.TreeFitSession.fromLabels(
@@ -208,7 +217,7 @@ async function runTreeFit({ fitId, seed = 1, quality = 1, width, height, rgba, c
     height,
     labels,
     seed,
-    budget,
+    quality,
     // Empty: from scratch; else the tree to refit from ("Refit from here").
     Float64Array.from(start ?? []),
   );

@@ -1219,6 +1219,17 @@ impl Generator for Building {
         true
     }
 
+    fn capabilities(&self) -> crate::Capabilities {
+        crate::Capabilities {
+            fit: Some(crate::FitMethod::Gradients),
+            display_name: "Building",
+            // The windows are glass from HIGH detail up (MEDIUM shows them as recessed bands),
+            // so a fitted building is shown and saved with the windows the photo shows.
+            fitted_lod: Lod::High,
+            mask_extra: crate::MaskExtra::Windows,
+        }
+    }
+
     fn generate(&self, params: &[f64], lod: Lod) -> Result<Mesh, GenError> {
         generate(self, params, lod)
     }

@@ -766,6 +766,15 @@ impl Generator for Dish {
         true
     }
 
+    fn capabilities(&self) -> crate::Capabilities {
+        crate::Capabilities {
+            fit: Some(crate::FitMethod::Gradients),
+            display_name: "Cup, mug or bowl",
+            fitted_lod: Lod::Low,
+            mask_extra: crate::MaskExtra::None,
+        }
+    }
+
     fn generate(&self, params: &[f64], lod: Lod) -> Result<Mesh, GenError> {
         generate(self, params, lod)
     }

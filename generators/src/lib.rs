@@ -109,8 +109,33 @@ impl ParamSpec {
     }
 }
 
+/// A spec serialises as the page's sliders read it: its fields, `kind` as `continuous`,
+/// `integer`, `boolean` or `categorical`, and `choices` (the categorical names, else empty).
+impl serde::Serialize for ParamSpec {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        let (kind, choices): (&str, &[&str]) = match self.kind {
+            ParamKind::Continuous => ("continuous", &[]),
+            ParamKind::Integer => ("integer", &[]),
+            ParamKind::Boolean => ("boolean", &[]),
+            ParamKind::Categorical(c) => ("categorical", c),
+        };
+        let mut st = s.serialize_struct("ParamSpec", 9)?;
+        st.serialize_field("name", self.name)?;
+        st.serialize_field("label", self.label)?;
+        st.serialize_field("group", self.group)?;
+        st.serialize_field("unit", self.unit)?;
+        st.serialize_field("min", &self.min)?;
+        st.serialize_field("max", &self.max)?;
+        st.serialize_field("default", &self.default)?;
+        st.serialize_field("kind", kind)?;
+        st.serialize_field("choices", choices)?;
+        st.end()
+    }
+}
+
 /// A named parameter vector that looks like a real object.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Preset {
     /// Stable machine name (e.g. `mug`).
     pub name: &'static str,
@@ -286,6 +311,66 @@ pub fn sanitize_params(spec: &[ParamSpec], params: &[f64]) -> Result<Vec<f64>, G
         .collect()
 }
 
+/// How a generator's parameters are fitted to photos.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FitMethod {
+    /// Silhouettes over every photo: a memetic search, then Adam on the paper's eq. 1 through
+    /// the generator's vector–Jacobian product (`procfit::reconstruct::Session`). Needs
+    /// [`Generator::differentiable`]; `auto` tries every generator fitted this way.
+    Gradients,
+    /// The tree GA on one photo's branch/leaf labels (`procfit::tree::impostor`, paper §3.5):
+    /// no gradients, the generator's `seed` parameter kept by a refit.
+    TreeGa,
+}
+
+impl FitMethod {
+    /// The name the page and the worker protocol use (`gradients`, `tree_ga`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            FitMethod::Gradients => "gradients",
+            FitMethod::TreeGa => "tree_ga",
+        }
+    }
+}
+
+/// Labels beyond the object mask that a generator's fit reads from a photo, and so the mask
+/// tools the page shows for it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MaskExtra {
+    /// The object mask is all.
+    None,
+    /// Window labels (façade, window) inside the mask: the window term of the fit.
+    Windows,
+    /// Branch/leaf labels from the photo's colours inside the mask (what the tree GA fits).
+    TreeLabels,
+}
+
+impl MaskExtra {
+    /// The name the page uses (`none`, `windows`, `tree_labels`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            MaskExtra::None => "none",
+            MaskExtra::Windows => "windows",
+            MaskExtra::TreeLabels => "tree_labels",
+        }
+    }
+}
+
+/// What a generator can do, as data: the CLI, the worker and the page read this instead of
+/// checking generator names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Capabilities {
+    /// How it is fitted to photos; `None`: it is not (the page offers no fit for it).
+    pub fit: Option<FitMethod>,
+    /// The name a person chooses it by (the page's generator choice).
+    pub display_name: &'static str,
+    /// Export detail: the least level of detail a fitted model is shown and saved at (the
+    /// CLI writes fits at [`Lod::High`] or this, whichever is finer).
+    pub fitted_lod: Lod,
+    /// The mask extras its fit reads.
+    pub mask_extra: MaskExtra,
+}
+
 /// The reverse-mode derivative of one generated mesh: maps dL/d(positions) to dL/d(params).
 pub trait Vjp: Send + Sync {
     /// Adds `Σ_v d_positions[v] · d(position v)/d(params)` into `d_params` (one entry per
@@ -308,6 +393,8 @@ pub trait Generator: Send + Sync {
     fn presets(&self) -> Vec<Preset>;
     /// Whether [`Generator::generate_with_vjp`] is available.
     fn differentiable(&self) -> bool;
+    /// How it is fitted, shown and exported (see [`Capabilities`]).
+    fn capabilities(&self) -> Capabilities;
     /// Builds the mesh. Parameters are validated with [`sanitize_params`].
     fn generate(&self, params: &[f64], lod: Lod) -> Result<Mesh, GenError>;
     /// Builds the mesh and its vector–Jacobian product from the same code path.
@@ -342,7 +429,8 @@ pub trait Generator: Send + Sync {
     }
 }
 
-/// Every generator procfit knows, in the order the page lists them.
+/// Every generator procfit knows, in the order the page lists them: the one registration
+/// list (a new generator is its own file plus one entry here).
 pub fn all() -> Vec<&'static dyn Generator> {
     vec![&dish::Dish, &building::Building, &tree::TreeGenerator]
 }

@@ -1149,6 +1149,14 @@ impl Generator for TreeGenerator {
     fn differentiable(&self) -> bool {
         false
     }
+    fn capabilities(&self) -> crate::Capabilities {
+        crate::Capabilities {
+            fit: Some(crate::FitMethod::TreeGa),
+            display_name: "Tree",
+            fitted_lod: Lod::Low,
+            mask_extra: crate::MaskExtra::TreeLabels,
+        }
+    }
     fn generate(&self, params: &[f64], lod: Lod) -> Result<Mesh, GenError> {
         let params = sanitize_params(&PARAMS, params)?;
         let sk = build_skeleton(&params, lod);

@@ -100,3 +100,43 @@ fn generate_with_vjp_builds_the_same_mesh_as_generate() {
         }
     }
 }
+
+#[test]
+fn capabilities_agree_with_what_each_generator_can_do() {
+    use procfit_generators::{FitMethod, MaskExtra};
+    let mut display = HashSet::new();
+    for g in all() {
+        let c = g.capabilities();
+        assert!(
+            !c.display_name.is_empty() && display.insert(c.display_name),
+            "{}: empty or shared display name {:?}",
+            g.name(),
+            c.display_name
+        );
+        // A gradient fit needs the generator's vector–Jacobian product.
+        if c.fit == Some(FitMethod::Gradients) {
+            assert!(g.differentiable(), "{} is fitted by gradients", g.name());
+            let p = g.defaults();
+            assert!(g.generate_with_vjp(&p, Lod::Low).is_ok(), "{}", g.name());
+        }
+        // The tree GA reads branch/leaf labels and keeps a `seed` parameter on a refit.
+        if c.fit == Some(FitMethod::TreeGa) {
+            assert_eq!(c.mask_extra, MaskExtra::TreeLabels, "{}", g.name());
+            assert!(g.params().iter().any(|p| p.name == "seed"), "{}", g.name());
+        }
+        if c.mask_extra == MaskExtra::TreeLabels {
+            assert_eq!(c.fit, Some(FitMethod::TreeGa), "{}", g.name());
+        }
+        // Window labels are matched against the mesh's window parts.
+        if c.mask_extra == MaskExtra::Windows {
+            let mesh = g.generate(&g.defaults(), c.fitted_lod).expect("generate");
+            assert!(
+                mesh.parts.iter().any(|p| p.name.starts_with("window")),
+                "{}: window labels but no window part at {:?}: {:?}",
+                g.name(),
+                c.fitted_lod,
+                mesh.parts
+            );
+        }
+    }
+}

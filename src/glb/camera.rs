@@ -24,10 +24,39 @@ pub struct ExportCamera {
     pub camera_to_world: [f32; 16],
 }
 
+/// Numbers per camera in a flat camera list ([`ExportCamera::to_floats`]): the vertical field of
+/// view (radians), the aspect (width / height), then the 4×4 camera-to-world matrix in
+/// column-major order. The page keeps a fit's cameras so, and hands them back for each GLB.
+pub const CAMERA_FLOATS: usize = 18;
+
 /// How far from 1 the scale of a "rigid" pose may be (float noise of a fitted rotation).
 const RIGID_TOLERANCE: f32 = 1e-3;
 
 impl ExportCamera {
+    /// The camera as [`CAMERA_FLOATS`] numbers (its name, near and far planes are not kept).
+    pub fn to_floats(&self) -> [f32; CAMERA_FLOATS] {
+        let mut out = [0.0; CAMERA_FLOATS];
+        out[0] = self.yfov;
+        out[1] = self.aspect;
+        out[2..].copy_from_slice(&self.camera_to_world);
+        out
+    }
+
+    /// A camera called `name` from [`CAMERA_FLOATS`] numbers, with the near plane at 0.01 and
+    /// an infinite far plane (what the fit's cameras are exported with).
+    pub fn from_floats(c: &[f32; CAMERA_FLOATS], name: Option<String>) -> ExportCamera {
+        let mut camera_to_world = [0.0; 16];
+        camera_to_world.copy_from_slice(&c[2..]);
+        ExportCamera {
+            name,
+            yfov: c[0],
+            aspect: c[1],
+            znear: 0.01,
+            zfar: None,
+            camera_to_world,
+        }
+    }
+
     /// A camera at `eye` looking at `target`, with world +Y as the up hint.
     pub fn look_at(eye: Vec3, target: Vec3, yfov: f32, aspect: f32) -> ExportCamera {
         // Columns of the pose: image right, image up, backward (the camera looks down −Z),

@@ -29,7 +29,7 @@ mod camera;
 pub mod export;
 pub mod import;
 
-pub use camera::ExportCamera;
+pub use camera::{CAMERA_FLOATS, ExportCamera};
 pub use export::{export_model, write_glb};
 pub use import::{ImportedGlb, ReferenceMesh, import_glb, import_obj, import_reference};
 

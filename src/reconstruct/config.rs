@@ -19,6 +19,17 @@ pub const DEFAULT_EVALUATIONS: usize = 5000;
 /// Largest number of [`FitConfig::restarts`].
 pub const MAX_RESTARTS: usize = 16;
 
+/// [`FitConfig::restarts`] by default: the best of three runs (see its doc for the measurement).
+pub const DEFAULT_RESTARTS: usize = 3;
+
+/// Largest [`FitConfig::quality`] a fit takes, from the page's slider and the CLI alike (16 ×
+/// the default budget is already minutes of work a run).
+pub const MAX_QUALITY: f64 = 16.0;
+
+/// Below this quality a fit is a quick preview: one run, not the best of several
+/// ([`FitConfig::restarts_for_quality`]).
+pub const QUICK_QUALITY: f64 = 0.5;
+
 /// Largest number of input views.
 pub const MAX_VIEWS: usize = 16;
 
@@ -79,7 +90,7 @@ impl Default for FitConfig {
             fit_fov: false,
             reg_weight: 1e-4,
             search_reg_weight: 1e-2,
-            restarts: 3,
+            restarts: DEFAULT_RESTARTS,
             resolutions: [128, 256, 512],
             // The paper runs stage 1 at LOW detail. Our dish's LOW mesh (12 sectors) is so
             // polygonal that, measured on random dishes, the true shape scored worse at 128² than
@@ -109,6 +120,16 @@ pub(super) struct Plan {
 }
 
 impl FitConfig {
+    /// The runs a fit at `quality` makes unless told otherwise, the one policy of the page and
+    /// the CLI: one below [`QUICK_QUALITY`] (a quick preview), else [`DEFAULT_RESTARTS`].
+    pub fn restarts_for_quality(quality: f64) -> usize {
+        if quality < QUICK_QUALITY {
+            1
+        } else {
+            DEFAULT_RESTARTS
+        }
+    }
+
     /// Stage-1 evaluations asked for: the budget, or [`DEFAULT_EVALUATIONS`] × quality.
     pub(super) fn stage1_evaluations(&self) -> usize {
         self.budget
@@ -141,9 +162,9 @@ impl FitConfig {
                 m.height()
             )));
         }
-        if !(config.quality.is_finite() && config.quality > 0.0 && config.quality <= 100.0) {
+        if !(config.quality.is_finite() && config.quality > 0.0 && config.quality <= MAX_QUALITY) {
             return Err(FitError(format!(
-                "quality {} is not in (0, 100]",
+                "quality {} is not in (0, {MAX_QUALITY}]",
                 config.quality
             )));
         }

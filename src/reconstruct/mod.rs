@@ -24,7 +24,10 @@ pub mod session;
 pub mod views;
 pub mod windows;
 
-pub use config::{DEFAULT_EVALUATIONS, FitConfig, MAX_RESTARTS, MAX_VIEWS};
+pub use config::{
+    DEFAULT_EVALUATIONS, DEFAULT_RESTARTS, FitConfig, MAX_QUALITY, MAX_RESTARTS, MAX_VIEWS,
+    QUICK_QUALITY,
+};
 pub use eval::{align_to_reference, iou64, normalized};
 pub use objective::{FitObjective, Layout, render_coverage, resample_mask};
 pub use session::{FitResult, PREVIEW_SIDE, Progress, Session};

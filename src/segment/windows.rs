@@ -14,8 +14,9 @@
 //!   some wall ([`Label::Background`]); colour models from the strokes and a graph cut inside
 //!   the object label the rest. Works whenever windows and wall differ in colour.
 //!
-//! When the mask is corrected afterwards, windows found automatically are simply found again;
-//! windows the user painted are kept as they are and [`clip_windows`] fits them to the new
+//! The wall brush on windows found automatically erases them ([`erase_windows`]). When the mask
+//! is corrected afterwards, windows found automatically are simply found again (and erased
+//! again where the wall brush went); windows the user painted are kept as they are and [`clip_windows`] fits them to the new
 //! object (none outside it, façade where the object grew).
 
 use super::gmm::{Gmm, Rgb};
@@ -124,6 +125,23 @@ pub fn detect_windows(photo: &Photo, seg: &Segmentation) -> Result<LabelImage, S
         }
     }
     labels(seg, &obj, &win)
+}
+
+/// `labels` with the windows under `strokes` turned into façade: the wall brush on windows found
+/// automatically (the page keeps those strokes and erases with them again when the windows are
+/// found again after a mask correction). Every other pixel keeps its label; a stroke's labels
+/// (its [`Stroke::label`]) do not matter. Errors on a bad stroke (radius, points).
+pub fn erase_windows(labels: &LabelImage, strokes: &[Stroke]) -> Result<LabelImage, SegmentError> {
+    let (w, h) = (labels.width() as usize, labels.height() as usize);
+    let mut out = labels.labels().to_vec();
+    for s in strokes {
+        for_stroke_pixels(s, w, h, |i| {
+            if out[i] == LABEL_WINDOW {
+                out[i] = LABEL_FACADE;
+            }
+        })?;
+    }
+    Ok(LabelImage::new(labels.width(), labels.height(), out)?)
 }
 
 /// Window labels made for an earlier mask, fitted to the segmentation's current one: window

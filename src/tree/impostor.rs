@@ -697,6 +697,28 @@ pub fn fit_tree(
 /// Side of the square reference a photo is framed into for a fit ([`start_photo_fit`]).
 pub const PHOTO_FIT_SIZE: u32 = 128;
 
+/// Fewest GA evaluations a photo fit at a low quality gets ([`ga_budget_for_quality`]).
+pub const MIN_QUALITY_BUDGET: usize = 200;
+
+/// The GA evaluations of a photo fit at `quality` (the page's effort, the CLI's `--quality`),
+/// the one policy both use: `None`, the default ([`GaConfig::default`]: 4 608 GA evaluations,
+/// 4 896 with the seed trials and the local search), at quality 1; else the default's
+/// evaluations × `quality`, at least [`MIN_QUALITY_BUDGET`]. Errors on a quality outside
+/// (0, [`crate::reconstruct::MAX_QUALITY`]], like the silhouette fit.
+pub fn ga_budget_for_quality(quality: f64) -> Result<Option<usize>, TreeError> {
+    let max = crate::reconstruct::MAX_QUALITY;
+    if !(quality.is_finite() && quality > 0.0 && quality <= max) {
+        return Err(TreeError(format!("quality {quality} is not in (0, {max}]")));
+    }
+    if quality == 1.0 {
+        return Ok(None);
+    }
+    let default = GaConfig::default().evaluations() as f64;
+    Ok(Some(
+        ((default * quality).round() as usize).max(MIN_QUALITY_BUDGET),
+    ))
+}
+
 /// A fit of a photo's tree: the session and where the photo went (for its camera).
 pub struct PhotoTreeFit {
     /// The fit; step it to the end.

@@ -2,16 +2,13 @@
 //! workloads the native benches time, behind opaque handles. Timing happens in JS
 //! (`performance.now()` in the worker); each method here is one timed step.
 
+use super::js;
 use crate::generators::{self, Lod};
 use crate::render::bench::{BenchMesh, BenchScene};
 use crate::segment::bench::synthetic_photo_jpeg;
 use crate::segment::{Label, Options, Photo, Session, Stroke, WORKING_SIDE};
 use glam::Vec3;
 use wasm_bindgen::prelude::*;
-
-fn js(e: impl std::fmt::Display) -> JsError {
-    JsError::new(&e.to_string())
-}
 
 /// The renderer benchmark scene of `benches/render.rs`.
 #[wasm_bindgen]

@@ -3,13 +3,10 @@
 //! message loop between them, so the page stays responsive and a cancel arrives promptly;
 //! cancelling is simply not stepping any more.
 
+use super::js;
 use crate::mask::{LabelImage, Mask};
 use crate::reconstruct::{FitConfig, Session, export_camera};
 use wasm_bindgen::prelude::*;
-
-fn js(e: impl std::fmt::Display) -> JsError {
-    JsError::new(&e.to_string())
-}
 
 /// A fit in progress.
 #[wasm_bindgen]
@@ -159,9 +156,6 @@ impl FitSession {
         window_flags: &[u8],
         window_codes: &[u8],
     ) -> Result<FitSession, JsError> {
-        if !(quality.is_finite() && quality > 0.0 && quality <= 16.0) {
-            return Err(JsError::new("quality must be in (0, 16]"));
-        }
         if !fov_y.is_empty() && fov_y.len() != widths.len() {
             return Err(JsError::new(&format!(
                 "{} fields of view for {} masks",
@@ -177,12 +171,8 @@ impl FitSession {
             fov_y: fov_y.iter().map(|&f| (f != 0.0).then_some(f)).collect(),
             start: (!start.is_empty()).then(|| start.to_vec()),
             windows: windows_of(widths, heights, window_flags, window_codes)?,
-            // "Quick" (quality below ½) is a preview: one run, not the best of several.
-            restarts: if quality < 0.5 {
-                1
-            } else {
-                FitConfig::default().restarts
-            },
+            // The core's policy: a quick preview is one run (quality is checked there too).
+            restarts: FitConfig::restarts_for_quality(quality),
             ..FitConfig::default()
         };
         let masks = masks_of(widths, heights, codes)?;
@@ -237,13 +227,11 @@ impl FitSession {
     /// The best model so far (the result once done).
     pub fn result(&self) -> Result<JsValue, JsError> {
         let r = self.session.result().map_err(js)?;
-        let mut cameras = Vec::with_capacity(r.views.len() * super::CAMERA_FLOATS);
-        for v in &r.views {
-            let c = export_camera(v, None);
-            cameras.push(c.yfov);
-            cameras.push(c.aspect);
-            cameras.extend_from_slice(&c.camera_to_world);
-        }
+        let cameras: Vec<f32> = r
+            .views
+            .iter()
+            .flat_map(|v| export_camera(v, None).to_floats())
+            .collect();
         let out = ResultOut {
             generator: r.model.generator.name(),
             params: r.model.params.clone(),

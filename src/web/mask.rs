@@ -3,14 +3,11 @@
 //! canvas; masks go out as 8-bit codes (object 255, background 0, don't care 128 — the same
 //! as [`Mask::to_luma8`](crate::mask::Mask::to_luma8)), in working-image pixels.
 
+use super::js;
 use crate::mask::LabelImage;
-use crate::segment::windows::{clip_windows, detect_windows, windows_from_strokes};
+use crate::segment::windows::{clip_windows, detect_windows, erase_windows, windows_from_strokes};
 use crate::segment::{BBox, Label, Options, Photo, Session, Stroke, WORKING_SIDE};
 use wasm_bindgen::prelude::*;
-
-fn js(e: impl std::fmt::Display) -> JsError {
-    JsError::new(&e.to_string())
-}
 
 /// A photo's segmentation, kept for corrections.
 #[wasm_bindgen]
@@ -29,6 +26,21 @@ struct MaskInfo {
     confidence: f32,
     low_confidence: bool,
     warnings: Vec<String>,
+}
+
+impl MaskSession {
+    /// A label image the size of the current mask, from the page's bytes.
+    fn labels_of(&self, labels: &[u8]) -> Result<LabelImage, JsError> {
+        let s = self.session.segmentation();
+        let (w, h) = (s.object.width(), s.object.height());
+        if labels.len() != (w as usize) * (h as usize) {
+            return Err(JsError::new(&format!(
+                "{} window labels for a {w}×{h} mask",
+                labels.len()
+            )));
+        }
+        LabelImage::new(w, h, labels.to_vec()).map_err(js)
+    }
 }
 
 #[wasm_bindgen]
@@ -64,15 +76,7 @@ impl MaskSession {
         if !(radius.is_finite() && radius > 0.0) {
             return Err(JsError::new("a stroke needs a positive radius"));
         }
-        let stroke = Stroke {
-            label: if object {
-                Label::Object
-            } else {
-                Label::Background
-            },
-            points: points.chunks_exact(2).map(|p| [p[0], p[1]]).collect(),
-            radius,
-        };
+        let stroke = stroke_of(object, points, radius);
         self.session.add_stroke(&stroke).map_err(js)?;
         self.session.recut().map_err(js)?;
         Ok(())
@@ -99,48 +103,29 @@ impl MaskSession {
         points: &[f32],
         radii: &[f32],
     ) -> Result<Vec<u8>, JsError> {
-        if window.len() != counts.len() || window.len() != radii.len() {
-            return Err(JsError::new(
-                "one kind, point count and radius per window stroke",
-            ));
-        }
-        if !points.iter().all(|v| v.is_finite()) || !radii.iter().all(|r| r.is_finite() && *r > 0.0)
-        {
-            return Err(JsError::new(
-                "window strokes need finite points and positive radii",
-            ));
-        }
-        let mut strokes = Vec::with_capacity(window.len());
-        let mut at = 0usize;
-        for ((&kind, &n), &radius) in window.iter().zip(counts).zip(radii) {
-            let n = n as usize;
-            let Some(p) = points.get(2 * at..2 * (at + n)) else {
-                return Err(JsError::new(
-                    "the window stroke points are fewer than the counts say",
-                ));
-            };
-            if n == 0 {
-                return Err(JsError::new("a window stroke needs at least one point"));
-            }
-            strokes.push(Stroke {
-                label: if kind == 1 {
-                    Label::Object
-                } else {
-                    Label::Background
-                },
-                points: p.chunks_exact(2).map(|q| [q[0], q[1]]).collect(),
-                radius,
-            });
-            at += n;
-        }
-        if 2 * at != points.len() {
-            return Err(JsError::new(
-                "the window stroke points are more than the counts say",
-            ));
-        }
+        let strokes = strokes_of(window, counts, points, radii)?;
         let labels =
             windows_from_strokes(&self.photo, self.session.segmentation(), &strokes).map_err(js)?;
         Ok(labels.labels().to_vec())
+    }
+
+    /// `labels` (as the calls here give them) with the windows under the wall-brush strokes
+    /// turned into façade (see `segment::windows::erase_windows`): stroke `i` has `counts[i]`
+    /// points (`x, y` pairs in `points`) and radius `radii[i]`, in working pixels.
+    #[wasm_bindgen(js_name = eraseWindows)]
+    pub fn erase_windows(
+        &self,
+        labels: &[u8],
+        counts: &[u32],
+        points: &[f32],
+        radii: &[f32],
+    ) -> Result<Vec<u8>, JsError> {
+        let labels = self.labels_of(labels)?;
+        let strokes = strokes_of(&vec![0; counts.len()], counts, points, radii)?;
+        Ok(erase_windows(&labels, &strokes)
+            .map_err(js)?
+            .labels()
+            .to_vec())
     }
 
     /// Window labels made for an earlier mask (`labels`, as the two calls above give them)
@@ -148,16 +133,8 @@ impl MaskSession {
     /// `segment::windows::clip_windows`). For painted windows after a mask correction.
     #[wasm_bindgen(js_name = clipWindows)]
     pub fn clip_windows(&self, labels: &[u8]) -> Result<Vec<u8>, JsError> {
-        let s = self.session.segmentation();
-        let (w, h) = (s.object.width(), s.object.height());
-        if labels.len() != (w as usize) * (h as usize) {
-            return Err(JsError::new(&format!(
-                "{} window labels for a {w}×{h} mask",
-                labels.len()
-            )));
-        }
-        let previous = LabelImage::new(w, h, labels.to_vec()).map_err(js)?;
-        let clipped = clip_windows(s, &previous).map_err(js)?;
+        let previous = self.labels_of(labels)?;
+        let clipped = clip_windows(self.session.segmentation(), &previous).map_err(js)?;
         Ok(clipped.labels().to_vec())
     }
 
@@ -180,4 +157,60 @@ impl MaskSession {
         };
         serde_wasm_bindgen::to_value(&info).map_err(js)
     }
+}
+
+/// A stroke from the page's numbers: object (or window) when `object`, else background (or
+/// wall); `points` are `x, y` pairs in working pixels.
+fn stroke_of(object: bool, points: &[f32], radius: f32) -> Stroke {
+    Stroke {
+        label: if object {
+            Label::Object
+        } else {
+            Label::Background
+        },
+        points: points.chunks_exact(2).map(|p| [p[0], p[1]]).collect(),
+        radius,
+    }
+}
+
+/// Strokes from flat arrays: stroke `i` is a window (or object) stroke when `window[i]` is 1 and
+/// a wall (background) one when 0, has `counts[i]` points (`x, y` pairs in `points`, in order)
+/// and radius `radii[i]`, all in working pixels.
+fn strokes_of(
+    window: &[u8],
+    counts: &[u32],
+    points: &[f32],
+    radii: &[f32],
+) -> Result<Vec<Stroke>, JsError> {
+    if window.len() != counts.len() || window.len() != radii.len() {
+        return Err(JsError::new(
+            "one kind, point count and radius per window stroke",
+        ));
+    }
+    if !points.iter().all(|v| v.is_finite()) || !radii.iter().all(|r| r.is_finite() && *r > 0.0) {
+        return Err(JsError::new(
+            "window strokes need finite points and positive radii",
+        ));
+    }
+    let mut strokes = Vec::with_capacity(window.len());
+    let mut at = 0usize;
+    for ((&kind, &n), &radius) in window.iter().zip(counts).zip(radii) {
+        let n = n as usize;
+        let Some(p) = points.get(2 * at..2 * (at + n)) else {
+            return Err(JsError::new(
+                "the window stroke points are fewer than the counts say",
+            ));
+        };
+        if n == 0 {
+            return Err(JsError::new("a window stroke needs at least one point"));
+        }
+        strokes.push(stroke_of(kind == 1, p, radius));
+        at += n;
+    }
+    if 2 * at != points.len() {
+        return Err(JsError::new(
+            "the window stroke points are more than the counts say",
+        ));
+    }
+    Ok(strokes)
 }

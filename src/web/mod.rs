@@ -93,75 +93,40 @@ pub fn debug_panic() {
 #[wasm_bindgen(js_name = generatorSpecs)]
 pub fn generator_specs() -> Result<JsValue, JsError> {
     #[derive(serde::Serialize)]
-    struct Param {
-        name: &'static str,
-        label: &'static str,
-        group: &'static str,
-        unit: &'static str,
-        min: f64,
-        max: f64,
-        default: f64,
-        kind: &'static str,
-        choices: Vec<&'static str>,
-    }
-    #[derive(serde::Serialize)]
-    struct Preset {
-        name: &'static str,
-        label: &'static str,
-        values: Vec<f64>,
-    }
-    #[derive(serde::Serialize)]
     struct Spec {
         name: &'static str,
         label: &'static str,
         version: u32,
         differentiable: bool,
-        params: Vec<Param>,
-        presets: Vec<Preset>,
+        /// `gradients`, `tree_ga` or `null` (not fitted): how the page fits it.
+        fit: Option<&'static str>,
+        /// The name the page's generator choice shows.
+        display_name: &'static str,
+        /// The least level of detail (0..=3) a fitted model opens at.
+        fitted_lod: u8,
+        /// `none`, `windows` or `tree_labels`: the mask tools its fit reads.
+        mask_extra: &'static str,
+        /// Serialised by the generators crate (`ParamSpec`, `Preset`).
+        params: &'static [crate::generators::ParamSpec],
+        presets: Vec<crate::generators::Preset>,
     }
-    use crate::generators::ParamKind;
     let specs: Vec<Spec> = crate::generators::all()
         .into_iter()
-        .map(|g| Spec {
+        .map(|g| (g, g.capabilities()))
+        .map(|(g, caps)| Spec {
             name: g.name(),
             label: g.label(),
             version: g.version(),
             differentiable: g.differentiable(),
-            params: g
-                .params()
-                .iter()
-                .map(|p| {
-                    let (kind, choices) = match p.kind {
-                        ParamKind::Continuous => ("continuous", vec![]),
-                        ParamKind::Integer => ("integer", vec![]),
-                        ParamKind::Boolean => ("boolean", vec![]),
-                        ParamKind::Categorical(c) => ("categorical", c.to_vec()),
-                    };
-                    Param {
-                        name: p.name,
-                        label: p.label,
-                        group: p.group,
-                        unit: p.unit,
-                        min: p.min,
-                        max: p.max,
-                        default: p.default,
-                        kind,
-                        choices,
-                    }
-                })
-                .collect(),
-            presets: g
-                .presets()
-                .into_iter()
-                .map(|p| Preset {
-                    name: p.name,
-                    label: p.label,
-                    values: p.values,
-                })
-                .collect(),
+            fit: caps.fit.map(|f| f.as_str()),
+            display_name: caps.display_name,
+            fitted_lod: caps.fitted_lod as u8,
+            mask_extra: caps.mask_extra.as_str(),
+            params: g.params(),
+            presets: g.presets(),
         })
         .collect();
-    serde_wasm_bindgen::to_value(&specs).map_err(|e| JsError::new(&e.to_string()))
+    serde_wasm_bindgen::to_value(&specs).map_err(js)
 }
 
 /// The model a params JSON text or a procfit GLB describes, as the page keeps it.
@@ -188,12 +153,16 @@ impl From<&crate::model::Model> for ModelOut {
 fn model_of(generator: &str, params: &[f64], lod: u8) -> Result<crate::model::Model, JsError> {
     let lod = crate::generators::Lod::from_index(usize::from(lod))
         .ok_or_else(|| JsError::new(&format!("level of detail {lod} is not in 0..=3")))?;
-    crate::model::Model::new(generator, params, lod).map_err(|e| JsError::new(&e.to_string()))
+    crate::model::Model::new(generator, params, lod).map_err(js)
 }
 
-/// Floats per camera in [`generate_glb`]'s `cameras`: vertical field of view (radians),
-/// aspect (width / height), then the 4×4 camera-to-world matrix in column-major order.
-pub const CAMERA_FLOATS: usize = 18;
+pub use crate::glb::CAMERA_FLOATS;
+
+/// Every error crosses into JavaScript as a `JsError` with its message: the one conversion the
+/// edge's modules share.
+pub(crate) fn js(e: impl std::fmt::Display) -> JsError {
+    JsError::new(&e.to_string())
+}
 
 /// Generates the model's mesh and writes it as the very GLB the page downloads (generator state
 /// in the scene extras, one camera node per photo from `cameras`, see [`CAMERA_FLOATS`]). The
@@ -213,22 +182,13 @@ pub fn generate_glb(
         )));
     }
     let cameras: Vec<crate::glb::ExportCamera> = cameras
-        .chunks_exact(CAMERA_FLOATS)
+        .as_chunks::<CAMERA_FLOATS>()
+        .0
+        .iter()
         .enumerate()
-        .map(|(i, c)| {
-            let mut camera_to_world = [0.0; 16];
-            camera_to_world.copy_from_slice(&c[2..]);
-            crate::glb::ExportCamera {
-                name: Some(format!("photo {}", i + 1)),
-                yfov: c[0],
-                aspect: c[1],
-                znear: 0.01,
-                zfar: None,
-                camera_to_world,
-            }
-        })
+        .map(|(i, c)| crate::glb::ExportCamera::from_floats(c, Some(format!("photo {}", i + 1))))
         .collect();
-    crate::glb::export_model(&model, &cameras).map_err(|e| JsError::new(&e.to_string()))
+    crate::glb::export_model(&model, &cameras).map_err(js)
 }
 
 /// The paper's IoU-64 (mean silhouette IoU over 64 turntable views at `side`², both meshes
@@ -248,9 +208,7 @@ pub fn iou64_models(
     }
     let mesh = |g: &str, p: &[f64]| {
         let m = model_of(g, p, lod)?;
-        m.generator
-            .generate(&m.params, m.lod)
-            .map_err(|e| JsError::new(&e.to_string()))
+        m.generator.generate(&m.params, m.lod).map_err(js)
     };
     let a = mesh(generator_a, params_a)?;
     let b = mesh(generator_b, params_b)?;
@@ -259,7 +217,7 @@ pub fn iou64_models(
         (&b.positions, &b.triangles),
         side,
     )
-    .map_err(|e| JsError::new(&e.to_string()))
+    .map_err(js)
 }
 
 /// The params JSON of a model (what "download params" saves).
@@ -273,16 +231,8 @@ pub fn params_json(generator: &str, params: &[f64], lod: u8) -> Result<String, J
 /// a GLB from another tool, or JSON that is not procfit's, is an error saying so.
 #[wasm_bindgen(js_name = openModel)]
 pub fn open_model(bytes: &[u8]) -> Result<JsValue, JsError> {
-    let model = if bytes.starts_with(b"glTF") {
-        crate::glb::import_glb(bytes)
-            .and_then(|g| g.model())
-            .map_err(|e| JsError::new(&e.to_string()))?
-    } else {
-        let text = std::str::from_utf8(bytes)
-            .map_err(|_| JsError::new("the file is neither a GLB nor params JSON text"))?;
-        crate::model::Model::from_json(text).map_err(|e| JsError::new(&e.to_string()))?
-    };
-    serde_wasm_bindgen::to_value(&ModelOut::from(&model)).map_err(|e| JsError::new(&e.to_string()))
+    let model = crate::model::Model::from_file_bytes(bytes).map_err(js)?;
+    serde_wasm_bindgen::to_value(&ModelOut::from(&model)).map_err(js)
 }
 
 /// The 35 mm-equivalent focal length from a photo file's EXIF (the original bytes: the page's

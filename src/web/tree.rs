@@ -7,18 +7,18 @@
 //! ```js
 //! // A photo: RGBA bytes (width × height × 4), labelled by colour (green → leaf, brown/grey →
 //! // branch); `codes` is the mask step's output (0 background, 128 don't care, else object;
-//! // one byte a pixel) or an empty array to label the whole photo. `budget`: GA evaluations,
-//! // 0 for the default (≈ 4 700). `start`: a tree's parameters (Float64Array) to refit from
-//! // ("Refit from here": its seed is kept, the result is never less similar than it), or an
-//! // empty array to fit from scratch. The photo is labelled with the default colours.
-//! const fit = new TreeFitSession(width, height, rgba, codes, seed, budget, start);
+//! // one byte a pixel) or an empty array to label the whole photo. `quality`: the effort, in
+//! // (0, 16]; 1 is the default 4 608 GA evaluations (`ga_budget_for_quality`). `start`: a
+//! // tree's parameters (Float64Array) to refit from ("Refit from here": its seed is kept, the
+//! // result is never less similar than it), or an empty array to fit from scratch. The photo is labelled with the default colours.
+//! const fit = new TreeFitSession(width, height, rgba, codes, seed, quality, start);
 //! // Or a label image: 0 background, 1 branch, 2 leaf, 255 don't care — such as the labels of
 //! // a photo under other colour rules: `colors` is an object of `ColorThresholds`' camelCase
 //! // fields (any left out keep their defaults: `{ leafHue: [330, 170], restAsBranch: true }`)
 //! // or undefined for the defaults.
 //! const defaults = treeColorDefaults(); // ColorThresholds::default() as such an object
 //! const labels = treeLabels(width, height, rgba, codes, colors); // also what the page shows
-//! const fit = TreeFitSession.fromLabels(width, height, labels, seed, budget, start);
+//! const fit = TreeFitSession.fromLabels(width, height, labels, seed, quality, start);
 //! // Both throw an Error with a sentence for a mask with no tree, no leaves or no branches,
 //! // or a start that is not a tree's parameters.
 //! const p = fit.step(); // one GA generation (or the seed trials, or a local-search round)
@@ -27,7 +27,7 @@
 //! if (fit.previewWidth() > 0) {            // the best tree's labels changed in this step
 //!   const labels = fit.previewLabels();    // Uint8Array, previewWidth × previewHeight (128²)
 //! }
-//! const r = fit.result(); // { generator: "tree", params, lod, seed, similarity,
+//! const r = fit.result(); // { generator: the tree generator's name, params, lod, seed, similarity,
 //! //                          start_similarity (undefined without a start), evaluations,
 //! //                          cameras: Float32Array-able number[18] (yfov, aspect, 16 floats
 //! //                          camera-to-world, column-major): the photo's camera for generateGlb }
@@ -36,14 +36,14 @@
 //! Deterministic for a seed. The preview is in the fit's square frame (the photo's tree
 //! scaled to 80 % of its height, foot at the bottom centre), not the photo's.
 
+use super::js;
+use crate::generators::Generator;
 use crate::mask::LabelImage;
-use crate::tree::impostor::{Framing, PhotoTreeFit, TreeSession, start_photo_fit};
+use crate::tree::impostor::{
+    Framing, PhotoTreeFit, TreeSession, ga_budget_for_quality, start_photo_fit,
+};
 use crate::tree::labels::{ColorThresholds, apply_mask_codes, labels_from_rgb, labels_from_values};
 use wasm_bindgen::prelude::*;
-
-fn js(e: impl std::fmt::Display) -> JsError {
-    JsError::new(&e.to_string())
-}
 
 /// A tree fit in progress.
 #[wasm_bindgen]
@@ -78,24 +78,18 @@ struct ResultOut {
     cameras: Vec<f32>,
 }
 
-fn budget_of(budget: u32) -> Result<Option<usize>, JsError> {
-    match budget {
-        0 => Ok(None),
-        b if b > 200_000 => Err(JsError::new("a tree fit budget above 200000 evaluations")),
-        b => Ok(Some(b as usize)),
-    }
-}
-
 impl TreeFitSession {
     fn start(
         labels: &LabelImage,
         seed: u32,
-        budget: u32,
+        quality: f64,
         start: &[f64],
     ) -> Result<TreeFitSession, JsError> {
         let start = (!start.is_empty()).then_some(start);
+        // The core's policy turns the effort into GA evaluations, as for the CLI.
+        let budget = ga_budget_for_quality(quality).map_err(js)?;
         let PhotoTreeFit { session, framing } =
-            start_photo_fit(labels, u64::from(seed), budget_of(budget)?, start).map_err(js)?;
+            start_photo_fit(labels, u64::from(seed), budget, start).map_err(js)?;
         Ok(TreeFitSession {
             session,
             framing,
@@ -166,13 +160,13 @@ impl TreeFitSession {
         rgba: &[u8],
         codes: &[u8],
         seed: u32,
-        budget: u32,
+        quality: f64,
         start: &[f64],
     ) -> Result<TreeFitSession, JsError> {
         TreeFitSession::start(
             &photo_labels(width, height, rgba, codes, JsValue::UNDEFINED)?,
             seed,
-            budget,
+            quality,
             start,
         )
     }
@@ -184,11 +178,11 @@ impl TreeFitSession {
         height: u32,
         labels: &[u8],
         seed: u32,
-        budget: u32,
+        quality: f64,
         start: &[f64],
     ) -> Result<TreeFitSession, JsError> {
         let labels = labels_from_values(width, height, labels.to_vec()).map_err(js)?;
-        TreeFitSession::start(&labels, seed, budget, start)
+        TreeFitSession::start(&labels, seed, quality, start)
     }
 
     /// One bounded slice of work; returns where the fit stands.
@@ -232,13 +226,12 @@ impl TreeFitSession {
     pub fn result(&self) -> Result<JsValue, JsError> {
         let fit = self.session.result().map_err(js)?;
         let view = self.framing.photo_view().map_err(js)?;
-        let c = crate::reconstruct::export_camera(&view, None);
-        let mut cameras = Vec::with_capacity(super::CAMERA_FLOATS);
-        cameras.push(c.yfov);
-        cameras.push(c.aspect);
-        cameras.extend_from_slice(&c.camera_to_world);
+        let cameras = crate::reconstruct::export_camera(&view, None)
+            .to_floats()
+            .to_vec();
         let out = ResultOut {
-            generator: "tree",
+            // The tree GA fits the tree generator and no other.
+            generator: crate::generators::tree::TreeGenerator.name(),
             params: fit.params,
             lod: crate::generators::Lod::High as u8,
             seed: self.seed,

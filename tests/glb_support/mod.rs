@@ -66,6 +66,14 @@ impl Generator for Prism {
     fn differentiable(&self) -> bool {
         false
     }
+    fn capabilities(&self) -> procfit::generators::Capabilities {
+        procfit::generators::Capabilities {
+            fit: None,
+            display_name: "Test prism",
+            fitted_lod: Lod::Low,
+            mask_extra: procfit::generators::MaskExtra::None,
+        }
+    }
     fn generate(&self, params: &[f64], lod: Lod) -> Result<Mesh, GenError> {
         let p = sanitize_params(self.params(), params)?;
         let (radius, height) = (p[0] as f32, p[1] as f32);

@@ -1,0 +1,117 @@
+// @ts-check
+// The fit step's wiring: Fit (the generator chosen, or Automatic), "Refit from here" (from the
+// edited model), cancel, and the fitted model handed to the editor with a sentence on how it
+// went. How a generator is fitted is its spec's `fit`; FitRunner (fitting.js) runs it.
+import { say } from './ui.js';
+import { FitRunner } from './fitting.js';
+import { $, client, state, specOf, fitGenerator } from './page.js';
+import { chooseGenerator } from './model-step.js';
+
+const fitMessage = $('fit-message');
+const fitter = new FitRunner({
+  client,
+  els: { stage: $('fit-stage'), eta: $('fit-eta'), bar: $('fit-bar'), preview: $('fit-preview'), curve: $('fit-curve'), box: $('fit-progress'), caption: $('fit-preview-caption') },
+});
+window.procfit.fitter = fitter;
+
+/** Fit and Refit are enabled when every photo has its mask and the generator can be fitted. */
+export function updateFitButton() {
+  const ready = state.photos.length > 0 && state.photos.every((p) => p.mask);
+  const button = $('fit-start');
+  button.disabled = !ready || !!fitter.running || !state.editor;
+  button.title = ready ? '' : 'Add a photo and wait for its mask first';
+  const refit = $('refit');
+  // A generator fitted by the tree GA starts from a tree too (its seed kept).
+  const tree = state.editor?.spec?.fit === 'tree_ga';
+  const fittable = !!state.editor?.spec?.fit;
+  refit.disabled = button.disabled || !fittable;
+  refit.title = !ready
+    ? button.title
+    : !fittable
+      ? 'This generator cannot be fitted in this build'
+      : tree
+        ? 'Fit again, starting from the tree above (its seed, so its branches, stay)'
+        : 'Fit again, starting from the values above';
+}
+
+$('fit-start').addEventListener('click', () => {
+  const generator = fitGenerator();
+  const spec = specOf(generator);
+  // How a generator is fitted is its spec's `fit` (gradients, or the tree GA of paper §3.5).
+  if (spec && !spec.fit) {
+    say(fitMessage, `The ${spec.label.toLowerCase()} generator cannot be fitted in this build; choose another or Automatic.`);
+    return;
+  }
+  runFit({ generator });
+});
+
+// "Refit from here": the edited model (say, a handle fixed by hand) joins the fit's starting
+// population, so the fit polishes it against the photos instead of starting over. A tree's fit
+// keeps the tree's seed and never returns a tree less like the photo than the edited one.
+$('refit').addEventListener('click', () => {
+  const editor = state.editor;
+  if (!editor?.spec) return;
+  runFit({ generator: editor.spec.name, start: editor.params.slice() });
+});
+
+/**
+ * A tree refit's similarity to the photo, before → after (its result says both); else ''.
+ * @param {{ start_similarity?: number, similarity?: number }} r
+ */
+function similarityChange(r) {
+  if (typeof r.start_similarity !== 'number' || typeof r.similarity !== 'number') return '';
+  return `, similarity to the photo ${r.start_similarity.toFixed(3)} → ${r.similarity.toFixed(3)}`;
+}
+
+/**
+ * Runs a fit and hands its model to the editor; `start`: parameters to start from.
+ * @param {{ generator: string, start?: number[] | null }} o
+ */
+async function runFit({ generator, start = null }) {
+  say(fitMessage, '');
+  $('fit-cancel').hidden = false;
+  $('fit-start').disabled = true;
+  $('refit').disabled = true;
+  $('fit-cancel').focus();
+  let outcome = 'failed';
+  try {
+    const out = await fitter.run({ generator, specs: state.specs, photos: state.photos.slice(), quality: Number($('fit-quality').value), start });
+    const r = out.result;
+    // A refit that found nothing better gives back the very values it started from: say so,
+    // rather than let "Fitted" suggest the model changed.
+    // (Up to rounding: a tree's values go through the fit's [0, 1] genes and back.)
+    const kept =
+      start &&
+      r.generator === generator &&
+      r.params.length === start.length &&
+      r.params.every((v, i) => Math.abs(v - start[i]) <= 1e-9 * Math.max(1, Math.abs(start[i])));
+    // A fitted model opens at its generator's export detail at least (a building's windows
+    // are glass from HIGH up: the windows the photo shows).
+    const lod = Math.max(state.editor.lod, specOf(r.generator)?.fitted_lod ?? 0);
+    chooseGenerator(r.generator, { params: r.params, lod, preset: 'fitted', cameras: r.cameras });
+    say(
+      fitMessage,
+      out.cancelled
+        ? `Stopped after ${out.seconds.toFixed(1)} s; the best model so far is below.`
+        : kept
+          ? `Refitted in ${out.seconds.toFixed(1)} s (${r.evaluations.toLocaleString('en')} evaluations): nothing closer to the photos than your model was found, so it is kept.`
+          : `${start ? 'Refitted' : 'Fitted'} in ${out.seconds.toFixed(1)} s (${r.evaluations.toLocaleString('en')} evaluations)${similarityChange(r)}. Edit the model below; Reset returns to the fitted values.`,
+      'info',
+    );
+    outcome = out.cancelled ? 'cancelled' : 'done';
+  } catch (err) {
+    const hint = /same size/.test(err.message)
+      ? 'Use photos of the same shape and size (all from the same camera, all landscape or all portrait).'
+      : 'Check the masks above (the object must be inside the photo, not touching every edge), then try again.';
+    say(fitMessage, `The fit failed: ${err.message}. ${hint}`);
+    outcome = 'failed';
+    // Nothing to show from a fit that never ran.
+    if (!fitter.curves?.[1]?.length) $('fit-progress').hidden = true;
+  } finally {
+    $('fit-cancel').hidden = true;
+    updateFitButton();
+    // For the browser tests: the fit's outcome, set once the page is back to rest.
+    document.body.dataset.fitted = outcome;
+  }
+}
+$('fit-cancel').addEventListener('click', () => fitter.cancel());
