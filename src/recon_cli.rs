@@ -180,7 +180,14 @@ fn load_view(path: &Path) -> Result<LoadedView, String> {
     };
     if !auto {
         let obj: Vec<bool> = mask.values().iter().map(|&v| v >= 0.5).collect();
-        for warning in segment::mask_warnings(&obj, w as usize, h as usize) {
+        // An empty or full mask is the fit's one-line error; the rest is said here.
+        let area = obj.iter().filter(|&&o| o).count();
+        let said = if area == 0 || area == obj.len() {
+            Vec::new()
+        } else {
+            segment::mask_warnings(&obj, w as usize, h as usize)
+        };
+        for warning in said {
             eprintln!("procfit: {}: {warning}", path.display());
         }
     }
