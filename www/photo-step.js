@@ -26,22 +26,40 @@ export async function addFiles(files, source = 'file') {
     return;
   }
   const problems = [];
+  /** @type {string[]} */
+  const refused = [];
   for (const file of list) {
     if (isModelFile(file)) {
       await openModelFile(file);
       continue;
     }
-    if (state.photos.length >= MAX_PHOTOS) {
-      problems.push(`procfit takes up to ${MAX_PHOTOS} photos; remove one to add “${file.name}”.`);
+    const name = file.name || `pasted ${state.photos.length + 1}.png`;
+    if (isFull()) {
+      refused.push(name);
       continue;
     }
     try {
-      addPhoto(await photoOf(file, file.name || `pasted ${state.photos.length + 1}.png`));
+      addPhoto(await photoOf(file, name));
     } catch (err) {
       problems.push(err.message);
     }
   }
+  if (refused.length) problems.push(limitMessage(refused));
   if (problems.length) say(photosMessage, problems.join(' '));
+}
+
+/** Whether the photo list is at its limit ({@link MAX_PHOTOS}). */
+function isFull() {
+  return state.photos.length >= MAX_PHOTOS;
+}
+
+/**
+ * The one message for photos refused at the limit, however many and by whichever path.
+ * @param {string[]} names
+ */
+function limitMessage(names) {
+  const which = names.length === 1 ? `“${names[0]}” was not added` : `${names.length} photos were not added (${names.map((n) => `“${n}”`).join(', ')})`;
+  return `procfit takes up to ${MAX_PHOTOS} photos: ${which}. Remove a photo to add another.`;
 }
 
 /**
@@ -157,6 +175,10 @@ window.addEventListener('paste', (e) => {
 
 const camera = new CameraCapture({
   onShot: async (blob, name) => {
+    if (isFull()) {
+      say(photosMessage, limitMessage([name]));
+      return;
+    }
     try {
       addPhoto(await photoOf(blob, name));
     } catch (err) {
@@ -196,6 +218,10 @@ export async function loadSamples() {
 /** @param {{ name: string, label: string, file: string, thumb?: string, generator: string }} s */
 async function openSample(s) {
   say(photosMessage, '');
+  if (isFull()) {
+    say(photosMessage, limitMessage([s.label]));
+    return;
+  }
   try {
     const res = await fetch(`www/samples/${s.file}`);
     if (!res.ok) throw new Error(`the sample is missing (${res.status})`);

@@ -477,6 +477,27 @@ test('the camera (fake device) takes several shots', async () => {
   assert.equal(await page.evaluate(() => window.procfit.lastCameraTracks?.every((t) => t.readyState === 'ended')), true);
 });
 
+test('the photo limit holds on every path in, with one message', async () => {
+  const n0 = await page.$$eval('#thumbs li', (l) => l.length);
+  const mug = readFileSync(join(ROOT, 'www', 'samples', 'mug.jpg'));
+  const extra = 8 - n0 + 2;
+  const files = Array.from({ length: extra }, (_, k) => ({ name: `cup ${k + 1}.jpg`, mimeType: 'image/jpeg', buffer: mug }));
+  await page.setInputFiles('#file', files);
+  await page.waitForFunction(() => /takes up to 8 photos/.test(document.getElementById('photos-message').textContent), null, { timeout: 60000 });
+  assert.equal(await page.$$eval('#thumbs li', (l) => l.length), 8);
+  const said = await page.textContent('#photos-message');
+  assert.equal(said.match(/takes up to 8 photos/g).length, 1, said);
+  assert.match(said, /2 photos were not added/);
+  // A sample is one more photo: refused the same way, not added as a ninth.
+  await page.click('button[data-sample="mug"]');
+  await page.waitForFunction(() => /takes up to 8 photos/.test(document.getElementById('photos-message').textContent));
+  assert.equal(await page.$$eval('#thumbs li', (l) => l.length), 8);
+  // Back to where the other tests left it.
+  while ((await page.$$eval('#thumbs li', (l) => l.length)) > n0) {
+    await page.click('#thumbs li:last-child button.remove');
+  }
+});
+
 test('every control is reachable by keyboard and has a label', async () => {
   const unlabeled = await page.evaluate(() =>
     [...document.querySelectorAll('input, select, button, canvas[tabindex]')]
