@@ -43,9 +43,16 @@ fn mesh_of(generator: &str, preset: &str, lod: Lod) -> Mesh {
 
 /// Reads a binary STL as triangles of corner positions.
 fn read_stl(bytes: &[u8]) -> Vec<[[f32; 3]; 3]> {
-    assert!(!bytes.starts_with(b"solid"), "a binary STL header starting with `solid`");
+    assert!(
+        !bytes.starts_with(b"solid"),
+        "a binary STL header starting with `solid`"
+    );
     let count = u32::from_le_bytes(bytes[80..84].try_into().unwrap()) as usize;
-    assert_eq!(bytes.len(), 84 + 50 * count, "STL length for {count} triangles");
+    assert_eq!(
+        bytes.len(),
+        84 + 50 * count,
+        "STL length for {count} triangles"
+    );
     let f = |at: usize| f32::from_le_bytes(bytes[at..at + 4].try_into().unwrap());
     (0..count)
         .map(|t| {
@@ -85,7 +92,10 @@ fn every_dish_stl_is_watertight_and_consistently_wound() {
             let (open, flipped) = soup_defects(&tris);
             let what = format!("dish {} lod {}", preset.name, lod.index());
             assert_eq!(open, 0, "{what}: {open} edges not shared by two triangles");
-            assert_eq!(flipped, 0, "{what}: {flipped} edges wound the same way twice");
+            assert_eq!(
+                flipped, 0,
+                "{what}: {flipped} edges wound the same way twice"
+            );
             assert_eq!(open_edges(&mesh), 0, "{what}: open_edges disagrees");
         }
     }
@@ -96,8 +106,15 @@ fn a_tree_is_not_watertight_and_open_edges_says_so() {
     let mesh = mesh_of("tree", "oak", Lod::Low);
     let tris = read_stl(&write_stl(&mesh, "tree").unwrap());
     let (open, _) = soup_defects(&tris);
-    assert!(open > 0, "leaf cards have no thickness: their diagonals are used four times");
-    assert_eq!(open_edges(&mesh), open, "open_edges counts what an STL reader sees");
+    assert!(
+        open > 0,
+        "leaf cards have no thickness: their diagonals are used four times"
+    );
+    assert_eq!(
+        open_edges(&mesh),
+        open,
+        "open_edges counts what an STL reader sees"
+    );
 }
 
 #[test]
@@ -112,25 +129,47 @@ fn obj_parses_back_to_the_mesh_and_references_its_mtl() {
         let mut got = back.triangles.clone();
         want.sort_unstable();
         got.sort_unstable();
-        assert!(got == want, "{generator}: the OBJ's faces differ from the mesh's");
+        assert!(
+            got == want,
+            "{generator}: the OBJ's faces differ from the mesh's"
+        );
         for (a, b) in back.positions.iter().zip(&mesh.positions) {
-            assert!((*a - *b).abs().max_element() < 1e-6, "{generator}: {a} vs {b}");
+            assert!(
+                (*a - *b).abs().max_element() < 1e-6,
+                "{generator}: {a} vs {b}"
+            );
         }
         let obj = String::from_utf8(obj).unwrap();
         let mtl = String::from_utf8(mtl).unwrap();
         assert!(obj.lines().any(|l| l == "mtllib model.mtl"), "{generator}");
-        let used: Vec<&str> = obj.lines().filter_map(|l| l.strip_prefix("usemtl ")).collect();
-        let defined: Vec<&str> = mtl.lines().filter_map(|l| l.strip_prefix("newmtl ")).collect();
-        assert_eq!(used, defined, "{generator}: one material per non-empty part");
+        let used: Vec<&str> = obj
+            .lines()
+            .filter_map(|l| l.strip_prefix("usemtl "))
+            .collect();
+        let defined: Vec<&str> = mtl
+            .lines()
+            .filter_map(|l| l.strip_prefix("newmtl "))
+            .collect();
+        assert_eq!(
+            used, defined,
+            "{generator}: one material per non-empty part"
+        );
         // Exactly the parts that have triangles, each with its own colour.
         let nonempty = export::nonempty_parts(&mesh);
         assert_eq!(used.len(), nonempty, "{generator}");
         for part in mesh.parts.iter().filter(|p| used.contains(&p.name)) {
             let at = mtl.find(&format!("newmtl {}\n", part.name)).unwrap();
-            let kd = mtl[at..].lines().find_map(|l| l.strip_prefix("Kd ")).unwrap();
+            let kd = mtl[at..]
+                .lines()
+                .find_map(|l| l.strip_prefix("Kd "))
+                .unwrap();
             let kd: Vec<f32> = kd.split(' ').map(|x| x.parse().unwrap()).collect();
             for c in 0..3 {
-                assert!((kd[c] - part.color[c]).abs() < 1e-6, "{}: Kd {kd:?}", part.name);
+                assert!(
+                    (kd[c] - part.color[c]).abs() < 1e-6,
+                    "{}: Kd {kd:?}",
+                    part.name
+                );
             }
         }
         // Texture coordinates flipped to OBJ's bottom-left origin.
@@ -168,7 +207,10 @@ fn cli_writes_obj_with_its_mtl_and_stl_by_extension_or_format() {
         obj.to_str().unwrap(),
     ]);
     assert!(ok, "{text}");
-    assert!(text.contains("watertight") && !text.contains("not watertight"), "{text}");
+    assert!(
+        text.contains("watertight") && !text.contains("not watertight"),
+        "{text}"
+    );
     let back = import_obj(&std::fs::read(&obj).unwrap()).unwrap();
     let model = Model::new(
         "dish",
@@ -217,7 +259,10 @@ fn cli_writes_obj_with_its_mtl_and_stl_by_extension_or_format() {
         tree.to_str().unwrap(),
     ]);
     assert!(ok, "{text}");
-    assert!(text.contains("not watertight") && text.contains("leaf cards have no thickness"), "{text}");
+    assert!(
+        text.contains("not watertight") && text.contains("leaf cards have no thickness"),
+        "{text}"
+    );
 }
 
 #[test]
@@ -231,17 +276,38 @@ fn cli_refuses_unclear_formats_and_checks_the_mtl_before_work() {
     let glb = tmp("x.glb");
     let glb = glb.to_str().unwrap();
     check(
-        &["generate", "--generator", "dish", "--format", "stl", "-o", glb],
+        &[
+            "generate",
+            "--generator",
+            "dish",
+            "--format",
+            "stl",
+            "-o",
+            glb,
+        ],
         "make them agree",
     );
     let bare = tmp("noext");
     check(
-        &["generate", "--generator", "dish", "-o", bare.to_str().unwrap()],
+        &[
+            "generate",
+            "--generator",
+            "dish",
+            "-o",
+            bare.to_str().unwrap(),
+        ],
         "--format glb|obj|stl",
     );
     let stl = tmp("x.stl");
     check(
-        &["generate", "--generator", "dish", "--compact", "-o", stl.to_str().unwrap()],
+        &[
+            "generate",
+            "--generator",
+            "dish",
+            "--compact",
+            "-o",
+            stl.to_str().unwrap(),
+        ],
         "--compact is for GLB",
     );
     // The OBJ's material file would overwrite the params input: refused before any work.
@@ -268,7 +334,11 @@ fn cli_refuses_unclear_formats_and_checks_the_mtl_before_work() {
         ],
         "is an input",
     );
-    assert_eq!(std::fs::read(&params).unwrap(), before, "the input is untouched");
+    assert_eq!(
+        std::fs::read(&params).unwrap(),
+        before,
+        "the input is untouched"
+    );
     assert!(!out.exists(), "nothing written when the check fails");
 }
 
@@ -276,7 +346,11 @@ fn cli_refuses_unclear_formats_and_checks_the_mtl_before_work() {
 fn cli_parts_count_only_parts_with_triangles() {
     // The dish's handle part is empty for a handle-less bowl; the line must not count it.
     let bowl = mesh_of("dish", "bowl", Lod::Low);
-    assert_eq!(export::nonempty_parts(&bowl), bowl.parts.len() - 1, "the bowl has no handle");
+    assert_eq!(
+        export::nonempty_parts(&bowl),
+        bowl.parts.len() - 1,
+        "the bowl has no handle"
+    );
     let g = generators::by_name("dish").unwrap();
     for preset in g.presets() {
         let mesh = g.generate(&preset.values, Lod::Low).unwrap();

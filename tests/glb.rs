@@ -158,11 +158,18 @@ fn reversed_copies(mesh: &Mesh) -> usize {
 #[test]
 fn leaf_cards_are_written_once_with_a_double_sided_material() {
     use procfit::generators::tree::PART_LEAF;
-    let model = Model::new("tree", &generators::by_name("tree").unwrap().defaults(), Lod::High)
-        .unwrap();
+    let model = Model::new(
+        "tree",
+        &generators::by_name("tree").unwrap().defaults(),
+        Lod::High,
+    )
+    .unwrap();
     let mesh = model.generator.generate(&model.params, model.lod).unwrap();
     let leaf_tris = mesh.tri_parts.iter().filter(|&&p| p == PART_LEAF).count();
-    assert!(leaf_tris > 0 && reversed_copies(&mesh) == leaf_tris / 2, "the generator's cards are two-sided");
+    assert!(
+        leaf_tris > 0 && reversed_copies(&mesh) == leaf_tris / 2,
+        "the generator's cards are two-sided"
+    );
     let imported = import_glb(&export_model(&model, &[]).unwrap()).unwrap();
     let leaf_part = imported
         .reference
@@ -170,7 +177,12 @@ fn leaf_cards_are_written_once_with_a_double_sided_material() {
         .iter()
         .position(|n| n == "leaf")
         .unwrap() as u32;
-    let written = imported.reference.tri_parts.iter().filter(|&&p| p == leaf_part).count();
+    let written = imported
+        .reference
+        .tri_parts
+        .iter()
+        .filter(|&&p| p == leaf_part)
+        .count();
     assert_eq!(written, leaf_tris / 2, "each card once");
     let json = glb_json(&export_model(&model, &[]).unwrap());
     let leaf_material = json["materials"]

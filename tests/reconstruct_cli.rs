@@ -135,7 +135,10 @@ fn render_reconstruct_eval_round_trip() {
     ]);
     assert!(said.contains("dish fitted"), "{said}");
     assert!(said.contains("photo-view IoU"), "{said}");
-    assert!(said.contains("lod 2,"), "the default level of detail is 2: {said}");
+    assert!(
+        said.contains("lod 2,"),
+        "the default level of detail is 2: {said}"
+    );
 
     // Issue 17: `--lod` and OBJ out (with its MTL), from the same fit.
     let (obj, obj_params) = (scratch("refit.obj"), scratch("refit-obj.json"));
@@ -161,14 +164,28 @@ fn render_reconstruct_eval_round_trip() {
         "--params-out",
         s(&obj_params),
     ]);
-    assert!(said.contains("lod 1,") && said.contains("watertight"), "{said}");
+    assert!(
+        said.contains("lod 1,") && said.contains("watertight"),
+        "{said}"
+    );
     let fitted =
         procfit::model::Model::from_json(&std::fs::read_to_string(&obj_params).unwrap()).unwrap();
     assert_eq!(fitted.lod, procfit::generators::Lod::Medium);
-    let mesh = fitted.generator.generate(&fitted.params, fitted.lod).unwrap();
+    let mesh = fitted
+        .generator
+        .generate(&fitted.params, fitted.lod)
+        .unwrap();
     let back = procfit::glb::import_obj(&std::fs::read(&obj).unwrap()).unwrap();
-    assert_eq!(back.triangles.len(), mesh.triangles.len(), "the OBJ is the lod 1 mesh");
-    assert!(std::fs::read_to_string(&mtl).unwrap().contains("newmtl body"));
+    assert_eq!(
+        back.triangles.len(),
+        mesh.triangles.len(),
+        "the OBJ is the lod 1 mesh"
+    );
+    assert!(
+        std::fs::read_to_string(&mtl)
+            .unwrap()
+            .contains("newmtl body")
+    );
     for (args, needle) in [
         (
             vec!["--generator", "building", "--start", s(&params)],

@@ -302,25 +302,23 @@ fn write_primitive(
         min: Option<json::Value>,
         max: Option<json::Value>,
     }
-    let accessor = |root: &mut json::Root,
-                    view: json::Index<json::buffer::View>,
-                    count: usize,
-                    l: Layout| {
-        root.push(json::Accessor {
-            buffer_view: Some(view),
-            byte_offset: None,
-            count: USize64::from(count),
-            component_type: Valid(GenericComponentType(l.component)),
-            extensions: None,
-            extras: None,
-            type_: Valid(l.type_),
-            min: l.min,
-            max: l.max,
-            name: None,
-            normalized: l.normalized,
-            sparse: None,
-        })
-    };
+    let accessor =
+        |root: &mut json::Root, view: json::Index<json::buffer::View>, count: usize, l: Layout| {
+            root.push(json::Accessor {
+                buffer_view: Some(view),
+                byte_offset: None,
+                count: USize64::from(count),
+                component_type: Valid(GenericComponentType(l.component)),
+                extensions: None,
+                extras: None,
+                type_: Valid(l.type_),
+                min: l.min,
+                max: l.max,
+                name: None,
+                normalized: l.normalized,
+                sparse: None,
+            })
+        };
     let float = |type_: Type| Layout {
         component: ComponentType::F32,
         type_,
@@ -337,7 +335,11 @@ fn write_primitive(
         // p = centre + scale · q / 32767 with q in int16: the node carries centre and scale.
         let centre = (lo + hi) * 0.5;
         let half = ((hi - lo) * 0.5).max_element();
-        let scale = if half > 0.0 && half.is_finite() { half } else { 1.0 };
+        let scale = if half > 0.0 && half.is_finite() {
+            half
+        } else {
+            1.0
+        };
         let q: Vec<[i16; 3]> = part
             .positions
             .iter()
@@ -349,12 +351,14 @@ fn write_primitive(
                     .map(|x| x as i16)
             })
             .collect();
-        let (qlo, qhi) = q.iter().fold(([i16::MAX; 3], [i16::MIN; 3]), |(lo, hi), v| {
-            (
-                [0, 1, 2].map(|k| lo[k].min(v[k])),
-                [0, 1, 2].map(|k| hi[k].max(v[k])),
-            )
-        });
+        let (qlo, qhi) = q
+            .iter()
+            .fold(([i16::MAX; 3], [i16::MIN; 3]), |(lo, hi), v| {
+                (
+                    [0, 1, 2].map(|k| lo[k].min(v[k])),
+                    [0, 1, 2].map(|k| hi[k].max(v[k])),
+                )
+            });
         // Each element padded to 8 bytes.
         let bytes: Vec<u8> = q
             .iter()
