@@ -235,3 +235,51 @@ fn skeleton_counts_graph_vertices() {
     assert_eq!(sk.graph_vertices(), expected);
     assert!(sk.stems.len() > 10 && !sk.leaves.is_empty());
 }
+
+/// Bounding box of the leaf triangles (the crown) of a mesh.
+fn crown_box(m: &Mesh) -> (glam::Vec3, glam::Vec3) {
+    let mut lo = glam::Vec3::INFINITY;
+    let mut hi = glam::Vec3::NEG_INFINITY;
+    for (t, &p) in m.triangles.iter().zip(&m.tri_parts) {
+        if p == PART_LEAF {
+            for &i in t {
+                lo = lo.min(m.positions[i as usize]);
+                hi = hi.max(m.positions[i as usize]);
+            }
+        }
+    }
+    (lo, hi)
+}
+
+/// Issue 17: merged leaf cards at coarse levels used to grow from their bases, making LOD 0
+/// crowns 5–12 % taller and 4–14 % wider than LOD 3's. Every side of the crown's box must now be
+/// within 2 % of the LOD 3 crown's size on that axis, for several presets and seeds.
+#[test]
+fn crown_size_does_not_change_with_the_level_of_detail() {
+    let g = TreeGenerator;
+    let mut worst = 0.0f32;
+    for preset in g.presets() {
+        for seed in [0.0, 7.0, 123.0] {
+            let mut values = preset.values.clone();
+            values[tg::idx::SEED] = seed;
+            let (lo3, hi3) = crown_box(&g.generate(&values, Lod::Ultra).unwrap());
+            let size = hi3 - lo3;
+            for lod in [Lod::Low, Lod::Medium, Lod::High] {
+                let (lo, hi) = crown_box(&g.generate(&values, lod).unwrap());
+                let off = ((lo - lo3).abs().max((hi - hi3).abs()) / size).max_element();
+                worst = worst.max(off);
+                assert!(
+                    off <= 0.02,
+                    "{} seed {seed} lod {}: crown box {lo}..{hi}, at lod 3 {lo3}..{hi3} ({:.1} % off)",
+                    preset.name,
+                    lod.index(),
+                    100.0 * off
+                );
+            }
+        }
+    }
+    println!(
+        "worst crown box difference from lod 3: {:.2} %",
+        100.0 * worst
+    );
+}
