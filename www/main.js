@@ -11,6 +11,7 @@ import { Viewer } from './viewer.js';
 import { Editor, LODS } from './editor.js';
 import { MaskEditor, autoMask, reviveMask, detectWindows, windowsAfterMask, treeLabels, treeColors, AUTUMN_CHANGE, WINDOW } from './masking.js';
 import { FitRunner } from './fitting.js';
+import { initDownloadMenu } from './download.js';
 
 const $ = (id) => document.getElementById(id);
 const client = new WorkerClient();
@@ -650,6 +651,8 @@ $('download-glb').addEventListener('click', async () => {
   if (!glb) return;
   download(glb.bytes, `${fileStem()}.glb`, 'model/gltf-binary');
 });
+
+initDownloadMenu({ client, editor: () => state.editor, fileStem, onError: (m) => say(outMessage, m) });
 
 $('download-json').addEventListener('click', async () => {
   try {
