@@ -785,3 +785,59 @@ fn look_at_points_the_camera_down_its_minus_z_at_the_target() {
     assert!(m.transform_vector3(Vec3::Y).y > 0.0, "image up points up");
     assert_eq!(m.transform_point3(Vec3::ZERO), eye);
 }
+
+/// Issue 17: a compact GLB (`KHR_mesh_quantization`) opens again: the same model, and the same
+/// welded mesh within the quantisation step (1/32767 of each part's half-size).
+#[test]
+fn compact_glbs_open_again_as_the_same_model() {
+    use procfit::glb::{GlbOptions, write_glb_with};
+    for g in generators::all() {
+        let preset = g.presets().remove(0);
+        let model = Model::new(g.name(), &preset.values, Lod::Medium).unwrap();
+        let mesh = g.generate(&model.params, model.lod).unwrap();
+        let doc = model.to_doc();
+        let plain = import_glb(&write_glb(&mesh, Some(&doc), &[]).unwrap()).unwrap();
+        let compact = GlbOptions { quantize: true };
+        let small = import_glb(&write_glb_with(&mesh, Some(&doc), &[], compact).unwrap()).unwrap();
+        let what = g.name();
+        let back = small.model().unwrap();
+        assert_eq!(back.generator.name(), g.name(), "{what}");
+        assert_eq!(back.params, model.params, "{what}");
+        assert_eq!(
+            small.reference.triangles.len(),
+            plain.reference.triangles.len(),
+            "{what}"
+        );
+        assert_eq!(
+            small.reference.part_names, plain.reference.part_names,
+            "{what}"
+        );
+        let (lo, hi) = plain
+            .reference
+            .positions
+            .iter()
+            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| {
+                (lo.min(p), hi.max(p))
+            });
+        let step = (hi - lo).max_element() / 32767.0;
+        // Welding can differ (two positions one step apart may fall together), so each
+        // triangle's corners are compared through their own indices.
+        let mut worst = 0.0f32;
+        for (ta, tb) in small
+            .reference
+            .triangles
+            .iter()
+            .zip(&plain.reference.triangles)
+        {
+            for k in 0..3 {
+                let a = small.reference.positions[ta[k] as usize];
+                let b = plain.reference.positions[tb[k] as usize];
+                worst = worst.max((a - b).abs().max_element());
+            }
+        }
+        assert!(
+            worst <= step,
+            "{what}: a corner moved {worst} (step {step})"
+        );
+    }
+}
