@@ -501,9 +501,6 @@ struct Builder<'a> {
     sk: Skeleton,
     /// Height of the crown base and of the top, for the pruning envelope.
     crown: (f32, f32),
-    /// Bounding box of the leaves at full resolution (unmerged cards), what merged cards are
-    /// fitted to.
-    full_leaves: (Vec3, Vec3),
 }
 
 impl Builder<'_> {
@@ -743,19 +740,15 @@ impl Builder<'_> {
         }
     }
 
-    /// Leaf cards along a last-level stem. The full-resolution cards are always drawn (the same
-    /// random choices at every level of detail); at a coarse level each run of `leaf_merge` of
-    /// them becomes one card of √merge the size (area kept) centred on the run's centre, so a
-    /// merged crown is made of the same leaves, not of larger cards growing from their bases.
+    /// Leaf cards along a last-level stem.
     fn leaves(&mut self, stem: usize) {
         let p = self.p;
-        let merge = self.d.leaf_merge.max(1);
-        let base_dims = Vec2::new(p.leaf_size, p.leaf_size * p.leaf_aspect);
-        // Leaves draw from their own stream, seeded by one draw of the tree's: it must not shift
-        // the random choices of the branches.
+        let merge = self.d.leaf_merge;
+        let n = p.leaves.div_ceil(merge);
+        let card_len = p.leaf_size * (merge as f32).sqrt();
+        // Leaves draw from their own stream, seeded by one draw of the tree's: the number of
+        // cards depends on the LOD, and it must not shift the random choices of the branches.
         let mut rng = Rng::from_state(self.rng.next_u64());
-        let n = p.leaves;
-        let mut run: Vec<(Vec3, Vec3, Vec3)> = Vec::with_capacity(merge);
         for k in 0..n {
             if self.sk.leaves.len() >= self.d.max_leaves {
                 return;
@@ -767,110 +760,12 @@ impl Builder<'_> {
             let mut ldir = (Quat::from_axis_angle(around, 0.6 + 0.4 * rng.sym_f32()) * dir)
                 .normalize_or(Vec3::Y);
             // Leaf clusters near the ground turn up rather than sink into it.
-            if (pos + ldir * p.leaf_size).y < 0.0 {
+            if (pos + ldir * card_len).y < 0.0 {
                 ldir.y = ldir.y.abs();
             }
             let normal = ldir.cross(around).normalize_or(Vec3::Z);
-            let (lo, hi) = card_box(pos, ldir, normal, base_dims);
-            self.full_leaves = (self.full_leaves.0.min(lo), self.full_leaves.1.max(hi));
-            if merge == 1 {
-                self.sk.leaves.push((pos, ldir, normal));
-                continue;
-            }
-            run.push((pos, ldir, normal));
-            if run.len() == merge || k + 1 == n {
-                self.sk.leaves.push(merged_card(&run, base_dims.x, merge));
-                run.clear();
-            }
+            self.sk.leaves.push((pos, ldir, normal));
         }
-    }
-}
-
-/// Corner bounding box of a leaf card attached at `pos`, along `dir`, facing `normal`.
-fn card_box(pos: Vec3, dir: Vec3, normal: Vec3, dims: Vec2) -> (Vec3, Vec3) {
-    let side = dir.cross(normal) * (0.5 * dims.y);
-    let tip = dir * dims.x;
-    [pos - side, pos + side, pos + side + tip, pos - side + tip]
-        .into_iter()
-        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), c| {
-            (lo.min(c), hi.max(c))
-        })
-}
-
-/// One card for a run of full-resolution cards of length `len`: the first one's orientation,
-/// √merge its length, centred on the mean of the run's card centres.
-fn merged_card(run: &[(Vec3, Vec3, Vec3)], len: f32, merge: usize) -> (Vec3, Vec3, Vec3) {
-    let centre = run
-        .iter()
-        .map(|&(p, d, _)| p + d * (0.5 * len))
-        .sum::<Vec3>()
-        / run.len() as f32;
-    let (_, dir, normal) = run[0];
-    let merged_len = len * (merge as f32).sqrt();
-    (centre - dir * (0.5 * merged_len), dir, normal)
-}
-
-/// Moves merged leaf cards (their centres scaled and shifted per axis about the leaves' centre)
-/// so that their bounding box is `target`, the full-resolution leaves': merged cards are larger
-/// than the leaves they stand for, and would otherwise widen and raise the crown at coarse
-/// levels of detail.
-fn fit_leaves_to(sk: &mut Skeleton, target: (Vec3, Vec3)) {
-    if sk.leaves.is_empty() || !target.0.is_finite() || !target.1.is_finite() {
-        return;
-    }
-    let boxes: Vec<(Vec3, Vec3)> = sk
-        .leaves
-        .iter()
-        .map(|&(p, d, n)| card_box(p, d, n, sk.leaf_dims))
-        .collect();
-    let centres: Vec<Vec3> = boxes.iter().map(|&(lo, hi)| (lo + hi) * 0.5).collect();
-    let halves: Vec<Vec3> = boxes.iter().map(|&(lo, hi)| (hi - lo) * 0.5).collect();
-    let mean = centres.iter().sum::<Vec3>() / centres.len() as f32;
-    let mut scale = [1.0f32; 3];
-    let mut shift = [0.0f32; 3];
-    for axis in 0..3 {
-        let d: Vec<f32> = centres.iter().map(|c| c[axis] - mean[axis]).collect();
-        let h: Vec<f32> = halves.iter().map(|v| v[axis]).collect();
-        // The extent at scale k: max(k·d + h) − min(k·d − h), piecewise linear and
-        // non-decreasing in k ≥ 0; Newton steps from k = 1 land on the kink-free piece.
-        let extent = |k: f32| {
-            let (mut hi, mut lo) = (f32::NEG_INFINITY, f32::INFINITY);
-            let (mut dhi, mut dlo) = (0.0, 0.0);
-            for (&di, &hi_i) in d.iter().zip(&h) {
-                if k * di + hi_i > hi {
-                    hi = k * di + hi_i;
-                    dhi = di;
-                }
-                if k * di - hi_i < lo {
-                    lo = k * di - hi_i;
-                    dlo = di;
-                }
-            }
-            (hi, lo, dhi - dlo)
-        };
-        let want = target.1[axis] - target.0[axis];
-        let mut k = 1.0f32;
-        for _ in 0..6 {
-            let (hi, lo, slope) = extent(k);
-            if slope <= 1e-9 {
-                break;
-            }
-            let next = (k - (hi - lo - want) / slope).clamp(0.0, 2.0);
-            if (next - k).abs() < 1e-6 {
-                k = next;
-                break;
-            }
-            k = next;
-        }
-        let (hi, lo, _) = extent(k);
-        scale[axis] = k;
-        // Centre the fitted extent on the target's.
-        shift[axis] = 0.5 * (target.0[axis] + target.1[axis]) - (mean[axis] + 0.5 * (hi + lo));
-    }
-    let (scale, shift) = (Vec3::from_array(scale), Vec3::from_array(shift));
-    for (leaf, &c) in sk.leaves.iter_mut().zip(&centres) {
-        let moved = mean + (c - mean) * scale + shift;
-        leaf.0 += moved - c;
     }
 }
 
@@ -886,7 +781,6 @@ fn build_skeleton(params: &[f64], lod: Lod) -> Skeleton {
         rng: Rng::from_state(seed),
         sk: Skeleton::default(),
         crown: (crown_lo, p.height),
-        full_leaves: (Vec3::INFINITY, Vec3::NEG_INFINITY),
     };
     let pieces = b.trunk();
     if p.levels >= 1 && !pieces.is_empty() {
@@ -909,11 +803,8 @@ fn build_skeleton(params: &[f64], lod: Lod) -> Skeleton {
             }
         }
     }
-    let merge = d.leaf_merge.max(1);
-    b.sk.leaf_dims = Vec2::new(p.leaf_size, p.leaf_size * p.leaf_aspect) * (merge as f32).sqrt();
-    if merge > 1 {
-        fit_leaves_to(&mut b.sk, b.full_leaves);
-    }
+    let merge = d.leaf_merge as f32;
+    b.sk.leaf_dims = Vec2::new(p.leaf_size, p.leaf_size * p.leaf_aspect) * merge.sqrt();
     b.sk
 }
 
