@@ -10,6 +10,8 @@ WASM_DIR := target/wasm
 WASM_FLAGS := --release --lib --target $(WASM_TARGET) --target-dir $(WASM_DIR) \
 	-Z build-std=panic_abort,std
 
+RAYON_HELPER = pkg/snippets/wasm-bindgen-rayon-*/src/workerHelpers.no-bundler.js
+
 .PHONY: help setup setup-test wasm wasm-st dist serve test lint test-rust test-e2e test-fuzz bench bench-page clean-pkg
 
 help:
@@ -27,6 +29,11 @@ setup-test:
 wasm: setup
 	cargo +nightly build $(WASM_FLAGS) --features threads
 	wasm-bindgen --target web --out-dir pkg $(WASM_DIR)/$(WASM_TARGET)/release/procfit.wasm
+	@# wasm-bindgen-rayon 1.3's no-bundler helper starts each thread with init's positional
+	@# parameters, which wasm-bindgen warns about on the console once per thread: pass the
+	@# options object instead (and fail loudly if a new version changes the line).
+	sed -i 's/await pkg.default(data.module, data.memory);/await pkg.default({ module_or_path: data.module, memory: data.memory });/' $(RAYON_HELPER)
+	grep -q 'module_or_path: data.module' $(RAYON_HELPER)
 
 # The single-threaded fallback for pages served without COOP/COEP (no SharedArrayBuffer): the
 # config's atomics rustflags are overridden, so std needs no rebuild.
@@ -34,15 +41,25 @@ wasm-st: setup
 	RUSTFLAGS="" cargo +nightly build --release --lib --target $(WASM_TARGET) --target-dir target/wasm-st
 	wasm-bindgen --target web --out-dir pkg-st target/wasm-st/$(WASM_TARGET)/release/procfit.wasm
 
-# A static site: the page, both wasm builds and the few three.js modules the page imports.
-# Served with COOP/COEP it runs threaded; without, single-threaded (and says so).
-THREE_FILES := build/three.module.js build/three.core.js LICENSE \
+# A static site: the page, both wasm builds and the few three.js modules the page imports
+# (minified three.js, as the import map names it). Served with COOP/COEP it runs threaded;
+# without, single-threaded (and says so). The wasm is optimised by wasm-opt (npm `binaryen`),
+# which also drops the function-name section (dev builds keep it for readable stack traces), and
+# every text/wasm file gets .br and .gz copies for hosts (and scripts/serve.py) that send them.
+THREE_FILES := build/three.module.min.js build/three.core.min.js LICENSE \
 	examples/jsm/loaders/GLTFLoader.js examples/jsm/controls/OrbitControls.js \
 	examples/jsm/utils/BufferGeometryUtils.js examples/jsm/utils/SkeletonUtils.js
+# The features rustc's wasm32 target and .cargo/config.toml enable, so wasm-opt adds no others.
+WASM_OPT := node_modules/.bin/wasm-opt -O2 --strip-debug --strip-producers \
+	--enable-bulk-memory --enable-mutable-globals --enable-sign-ext --enable-nontrapping-float-to-int \
+	--enable-reference-types --enable-multivalue
 dist: wasm wasm-st
 	rm -rf dist && mkdir -p dist
 	cp -r index.html www pkg pkg-st dist/
+	$(WASM_OPT) --enable-threads pkg/procfit_bg.wasm -o dist/pkg/procfit_bg.wasm
+	$(WASM_OPT) pkg-st/procfit_bg.wasm -o dist/pkg-st/procfit_bg.wasm
 	cd node_modules/three && for f in $(THREE_FILES); do install -D -m 644 $$f ../../dist/node_modules/three/$$f; done
+	node scripts/precompress.mjs dist | tail -1
 	@echo "dist/ is ready: serve it from any static host (COOP/COEP headers enable threads)"
 
 serve: wasm

@@ -6,6 +6,10 @@
   is cross-origin isolated and SharedArrayBuffer (threaded wasm) works. `--no-isolation` leaves
   them out, to exercise the page's single-threaded fallback.
 - Correct MIME types for .wasm, .js/.mjs, .glb and friends.
+- Compression by Accept-Encoding: a precompressed `FILE.br` or `FILE.gz` beside the file (what
+  `make dist` writes) is sent as is when the client takes it and it is not older than the file;
+  otherwise text, JavaScript, wasm and glTF are gzipped on the fly (kept in memory by path,
+  size and mtime). `Vary: Accept-Encoding` on those replies.
 - Refuses anything outside its root: `..` segments (also percent-encoded), absolute or
   protocol-relative paths, backslashes, NUL bytes and symlinks that lead out → 403; a missing
   file → 404.
@@ -16,6 +20,7 @@ free port). Prints the URL on its first line of stdout.
 
 import argparse
 import errno
+import gzip
 import http.server
 import os
 import posixpath
@@ -42,10 +47,38 @@ MIME = {
 }
 
 
+# Worth compressing: text formats, wasm and glTF (images are compressed already).
+COMPRESSIBLE = {".html", ".js", ".mjs", ".css", ".json", ".wasm", ".glb", ".gltf", ".svg", ".txt", ".md"}
+# Precompressed siblings, best first.
+PRECOMPRESSED = (("br", ".br"), ("gzip", ".gz"))
+
+
+def accepted_encodings(header):
+    """The content codings an Accept-Encoding header takes (q > 0), lower-case."""
+    out = set()
+    for item in (header or "").split(","):
+        name, _, params = item.strip().partition(";")
+        q = 1.0
+        for param in params.split(";"):
+            key, _, value = param.strip().partition("=")
+            if key == "q":
+                try:
+                    q = float(value)
+                except ValueError:
+                    q = 0.0
+        if name and q > 0:
+            out.add(name.strip().lower())
+    if "*" in out:
+        out |= {"br", "gzip"}
+    return out
+
+
 class Handler(http.server.BaseHTTPRequestHandler):
     root = "."
     isolation = True
     server_version = "procfit-serve"
+    # On-the-fly gzip results: path -> ((size, mtime), bytes).
+    gzipped = {}
 
     def log_message(self, fmt, *args):  # quiet by default; errors still reach stderr
         if os.environ.get("PROCFIT_SERVE_LOG"):
@@ -107,18 +140,49 @@ class Handler(http.server.BaseHTTPRequestHandler):
             return
         ext = os.path.splitext(target)[1].lower()
         try:
-            with open(target, "rb") as f:
-                body = f.read()
+            encoding, body = self.encoded(target, ext)
         except OSError:
             self.fail(404, "Not Found")
             return
         self.send_response(200)
         self.send_common_headers()
         self.send_header("Content-Type", MIME.get(ext, "application/octet-stream"))
+        if ext in COMPRESSIBLE:
+            self.send_header("Vary", "Accept-Encoding")
+        if encoding:
+            self.send_header("Content-Encoding", encoding)
         self.send_header("Content-Length", str(len(body)))
         self.end_headers()
         if self.command != "HEAD":
             self.wfile.write(body)
+
+    def encoded(self, target, ext):
+        """(content coding or None, body) for `target` as this client takes it."""
+        if ext not in COMPRESSIBLE:
+            with open(target, "rb") as f:
+                return None, f.read()
+        accepted = accepted_encodings(self.headers.get("Accept-Encoding"))
+        stat = os.stat(target)
+        for encoding, suffix in PRECOMPRESSED:
+            sibling = target + suffix
+            if encoding not in accepted or not os.path.isfile(sibling):
+                continue
+            # The sibling must be inside the root too (it could be a symlink) and up to date.
+            real = os.path.realpath(sibling)
+            if not real.startswith(self.root + os.sep) or os.stat(real).st_mtime < stat.st_mtime:
+                continue
+            with open(real, "rb") as f:
+                return encoding, f.read()
+        with open(target, "rb") as f:
+            body = f.read()
+        if "gzip" not in accepted or len(body) < 1024:
+            return None, body
+        key = (stat.st_size, stat.st_mtime_ns)
+        cached = Handler.gzipped.get(target)
+        if cached is None or cached[0] != key:
+            cached = (key, gzip.compress(body, compresslevel=6, mtime=0))
+            Handler.gzipped[target] = cached
+        return "gzip", cached[1]
 
     def do_POST(self):
         self.fail(405, "Method Not Allowed")

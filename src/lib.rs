@@ -11,6 +11,7 @@
 pub use procfit_generators as generators;
 
 pub mod camera;
+pub mod export;
 pub mod glb;
 pub mod loss;
 pub mod mask;

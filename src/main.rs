@@ -9,6 +9,7 @@ use procfit::model::Model;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+mod format_cli;
 mod outputs;
 mod recon_cli;
 
@@ -31,7 +32,7 @@ enum Command {
         name: Option<String>,
     },
     /// Write a generator's mesh as a GLB (glTF 2.0) with its parameters in the scene extras, so
-    /// that procfit can open it again for editing.
+    /// that procfit can open it again for editing; or as OBJ + MTL or binary STL (mesh only).
     Generate {
         /// Generator machine name (see `procfit generators`).
         #[arg(long)]
@@ -48,9 +49,15 @@ enum Command {
         /// Seed recorded in the file; default: the params file's, else none.
         #[arg(long)]
         seed: Option<u64>,
-        /// Output .glb path.
+        /// Output path: .glb, .obj (+ .mtl beside it) or .stl.
         #[arg(short, long)]
         output: PathBuf,
+        /// Output format (default: from the output's extension).
+        #[arg(long, value_parser = ["glb", "obj", "stl"])]
+        format: Option<String>,
+        /// GLB only: quantised attributes (KHR_mesh_quantization), about half the size.
+        #[arg(long)]
+        compact: bool,
     },
     /// Recompute the tree generator's Algorithm 3 mutation statistics (src/tree/mutation_stats.json).
     TreeStats {
@@ -78,13 +85,15 @@ fn main() -> ExitCode {
             lod,
             seed,
             output,
+            format,
+            compact,
         } => generate(
             &generator,
             preset.as_deref(),
             params.as_deref(),
             lod,
             seed,
-            &output,
+            (&output, format.as_deref(), compact),
         ),
         Command::TreeStats { out } => tree_stats(out.as_deref()),
         Command::Reconstruct(args) => recon_cli::reconstruct(&args),
@@ -132,13 +141,15 @@ fn generate(
     params: Option<&Path>,
     lod: Option<u8>,
     seed: Option<u64>,
-    output: &Path,
+    (output, format, compact): (&Path, Option<&str>, bool),
 ) -> Result<(), String> {
-    let mut plan = outputs::Outputs::new().output("-o", output);
+    let target = format_cli::Target::new(output, format, compact);
+    let mut plan = format_cli::Target::declare_any(&target, output, outputs::Outputs::new());
     if let Some(p) = params {
         plan = plan.input(p);
     }
     plan.check()?;
+    let target = target.as_ref().map_err(Clone::clone)?;
     let g = procfit::generators::by_name(generator)
         .ok_or_else(|| format!("unknown generator `{generator}` (see `procfit generators`)"))?;
     let mut model = match (preset, params) {
@@ -171,22 +182,13 @@ fn generate(
     if seed.is_some() {
         model.seed = seed;
     }
-    let mesh = model
-        .generator
-        .generate(&model.params, model.lod)
-        .map_err(|e| e.to_string())?;
-    let glb =
-        procfit::glb::write_glb(&mesh, Some(&model.to_doc()), &[]).map_err(|e| e.to_string())?;
-    outputs::write_atomic(output, &glb)?;
+    let summary = target.write(&model, &[])?;
     println!(
-        "wrote {}: {}{} lod {}, {} triangles in {} parts, {} bytes",
-        output.display(),
+        "wrote {}: {}{} lod {}, {summary}",
+        target.path.display(),
         model.generator.name(),
         preset.map(|p| format!(" {p}")).unwrap_or_default(),
         model.lod.index(),
-        mesh.triangles.len(),
-        mesh.parts.len(),
-        glb.len()
     );
     Ok(())
 }

@@ -1,6 +1,7 @@
 //! The CLI's reconstruction subcommands: `reconstruct`, `render` and `eval` (kept apart from
 //! `main.rs` so the subcommands of other rooms merge cleanly). Every error is one line.
 
+use crate::format_cli::Target;
 use crate::outputs::{Outputs, write_atomic};
 use clap::Args;
 use procfit::generators::{self, Lod, Mesh};
@@ -45,9 +46,20 @@ pub struct ReconstructArgs {
     /// view, all the same size.
     #[arg(required = true)]
     images: Vec<PathBuf>,
-    /// Output .glb path.
+    /// Output path: .glb (with the photos' cameras and the generator state), .obj (+ .mtl
+    /// beside it) or .stl.
     #[arg(short, long)]
     output: PathBuf,
+    /// Output format (default: from the output's extension).
+    #[arg(long, value_parser = ["glb", "obj", "stl"])]
+    format: Option<String>,
+    /// GLB only: quantised attributes (KHR_mesh_quantization), about half the size.
+    #[arg(long)]
+    compact: bool,
+    /// Level of detail of the written model, 0..=3 (default: the generator's export detail,
+    /// 2 or finer).
+    #[arg(long, value_parser = clap::value_parser!(u8).range(0..=3))]
+    lod: Option<u8>,
     /// Also write the parameters as params JSON here.
     #[arg(long)]
     params_out: Option<PathBuf>,
@@ -273,7 +285,8 @@ fn seconds(s: f64) -> String {
 /// `procfit reconstruct`: fit, progress on stderr, GLB (and params JSON) out.
 pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
     // Every output is checked before any work: a bad path fails now, not after the fit.
-    let mut plan = Outputs::new().inputs(&a.images).output("-o", &a.output);
+    let target = Target::new(&a.output, a.format.as_deref(), a.compact);
+    let mut plan = Target::declare_any(&target, &a.output, Outputs::new().inputs(&a.images));
     if let Some(p) = &a.start {
         plan = plan.input(p);
     }
@@ -281,6 +294,7 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
         plan = plan.output("--params-out", p);
     }
     plan.check()?;
+    let target = target.as_ref().map_err(Clone::clone)?;
     let start = a.start.as_deref().map(load_start).transpose()?;
     let generator = match &start {
         Some(m) if a.generator == "auto" || a.generator == m.generator.name() => {
@@ -300,7 +314,7 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
     if let Some(g) = generators::by_name(&generator)
         .filter(|g| g.capabilities().fit == Some(generators::FitMethod::TreeGa))
     {
-        return reconstruct_tree(a, g, start.as_deref());
+        return reconstruct_tree(a, g, target, start.as_deref());
     }
     if a.tree_colors.is_some() {
         return Err("--tree-colors is for --generator tree".into());
@@ -339,7 +353,7 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
     });
     let result = session.result().map_err(|e| e.to_string())?;
     let model = Model {
-        lod: fitted_lod(result.model.generator),
+        lod: lod_of(a, result.model.generator)?,
         ..result.model.clone()
     };
     let cameras: Vec<ExportCamera> = result
@@ -351,15 +365,16 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
             reconstruct::export_camera(v, name)
         })
         .collect();
-    write_outputs(a, &model, &cameras)?;
+    let summary = write_outputs(a, target, &model, &cameras)?;
     println!(
-        "wrote {}: {} fitted to {} view(s) in {:.1} s, {} evaluations, loss {:.5}",
+        "wrote {}: {} fitted to {} view(s) in {:.1} s, {} evaluations, loss {:.5}; lod {}, {summary}",
         a.output.display(),
         model.generator.name(),
         result.views.len(),
         start.elapsed().as_secs_f64(),
         result.evaluations,
-        result.loss
+        result.loss,
+        model.lod.index()
     );
     report_photo_match(&result.model, &result.views, &masks, &a.images)
 }
@@ -478,6 +493,7 @@ fn load_tree_labels(
 fn reconstruct_tree(
     a: &ReconstructArgs,
     generator: &'static dyn generators::Generator,
+    target: &Target,
     from: Option<&[f64]>,
 ) -> Result<(), String> {
     let [image] = &a.images[..] else {
@@ -521,13 +537,13 @@ fn reconstruct_tree(
         }
     });
     let fit = session.result().map_err(|e| e.to_string())?;
-    let mut model = Model::new(generator.name(), &fit.params, fitted_lod(generator))
+    let mut model = Model::new(generator.name(), &fit.params, lod_of(a, generator)?)
         .map_err(|e| e.to_string())?;
     model.seed = Some(a.seed);
     let photo_view = framing.photo_view().map_err(|e| e.to_string())?;
     let name = image.file_name().map(|n| n.to_string_lossy().into_owned());
     let cameras = [reconstruct::export_camera(&photo_view, name)];
-    write_outputs(a, &model, &cameras)?;
+    let summary = write_outputs(a, target, &model, &cameras)?;
     let from = session
         .start_similarity()
         .map(|s| format!(" (the start's {s:.3})"))
@@ -540,12 +556,13 @@ fn reconstruct_tree(
     };
     println!(
         "wrote {}: {} fitted to 1 view in {:.1} s, {} evaluations, similarity {paper:.3}, \
-         photo-view IoU {iou:.3}, fitness {:.3}{from}, {fov}",
+         photo-view IoU {iou:.3}, fitness {:.3}{from}, {fov}; lod {}, {summary}",
         a.output.display(),
         generator.name(),
         start.elapsed().as_secs_f64(),
         fit.ga.evaluations,
-        fit.similarity
+        fit.similarity,
+        model.lod.index()
     );
     if iou < TREE_MATCH_LEVEL {
         eprintln!(
@@ -561,18 +578,29 @@ fn reconstruct_tree(
 /// Below this photo-view IoU a fitted tree is said not to match its photo.
 const TREE_MATCH_LEVEL: f64 = 0.8;
 
-/// Writes the GLB (the model and its cameras) to `-o` and the params JSON to `--params-out`.
+/// `--lod` as a level of detail; without it, the generator's export detail ([`fitted_lod`]).
+fn lod_of(a: &ReconstructArgs, generator: &dyn generators::Generator) -> Result<Lod, String> {
+    match a.lod {
+        None => Ok(fitted_lod(generator)),
+        Some(l) => {
+            Lod::from_index(usize::from(l)).ok_or_else(|| format!("lod {l} is not in 0..=3"))
+        }
+    }
+}
+
+/// Writes the model (with its cameras, in a GLB) to `-o` in the target's format and the params
+/// JSON to `--params-out`; returns the export's summary.
 fn write_outputs(
     a: &ReconstructArgs,
+    target: &Target,
     model: &Model,
     cameras: &[procfit::glb::ExportCamera],
-) -> Result<(), String> {
-    let glb = glb::export_model(model, cameras).map_err(|e| e.to_string())?;
-    write_atomic(&a.output, &glb)?;
+) -> Result<String, String> {
+    let summary = target.write(model, cameras)?;
     if let Some(path) = &a.params_out {
         write_atomic(path, model.to_json().as_bytes())?;
     }
-    Ok(())
+    Ok(summary)
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {

@@ -1,8 +1,9 @@
-//! Writes a GLB for every built-in generator's presets × levels of detail (plus the test prism
-//! with cameras and a mesh that needs u32 indices) and runs the Khronos glTF-Validator on them
+//! Writes a GLB for every built-in generator's presets × levels of detail, each plain and compact
+//! (`KHR_mesh_quantization`, `<name>.compact.glb`) (plus the test prism with cameras and a mesh
+//! that needs u32 indices) and runs the Khronos glTF-Validator on them
 //! through `node tests/gltf_validate.mjs`: 0 errors and 0 warnings required; then loads them
 //! with three.js's GLTFLoader (`node tests/gltf_three.mjs`), which must find every named part and
-//! camera.
+//! camera, and must place every compact file's parts where the plain file has them.
 //!
 //! Needs `node` and `npm ci` (for `node_modules/gltf-validator`). Where node is truly absent, set
 //! `PROCFIT_SKIP_NODE=1` to skip the validator run explicitly; otherwise a missing node fails.
@@ -16,10 +17,16 @@ mod glb_support;
 
 use glb_support::{Prism, doc_of, strip};
 use procfit::generators::{self, Generator, Lod};
-use procfit::glb::{ExportCamera, export_model, write_glb};
+use procfit::glb::{ExportCamera, GlbOptions, export_model, write_glb, write_glb_with};
 use procfit::model::Model;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+
+/// Length of a GLB's BIN chunk (the geometry), after the JSON chunk.
+fn bin_len(glb: &[u8]) -> usize {
+    let word = |at: usize| u32::from_le_bytes(glb[at..at + 4].try_into().unwrap()) as usize;
+    word(20 + word(12))
+}
 
 /// Writes every GLB under test into `dir` and returns how many.
 fn write_all(dir: &Path) -> usize {
@@ -33,10 +40,18 @@ fn write_all(dir: &Path) -> usize {
             for lod in Lod::ALL {
                 let model = Model::new(g.name(), &preset.values, lod).unwrap();
                 let glb = export_model(&model, &[]).unwrap();
-                put(
-                    format!("{}-{}-lod{}", g.name(), preset.name, lod.index()),
-                    glb,
+                let name = format!("{}-{}-lod{}", g.name(), preset.name, lod.index());
+                let mesh = g.generate(&model.params, lod).unwrap();
+                let compact = GlbOptions { quantize: true };
+                let small = write_glb_with(&mesh, Some(&model.to_doc()), &[], compact).unwrap();
+                assert!(
+                    bin_len(&small) * 10 < bin_len(&glb) * 7,
+                    "{name}: compact geometry {} bytes, plain {}",
+                    bin_len(&small),
+                    bin_len(&glb)
                 );
+                put(format!("{name}.compact"), small);
+                put(name, glb);
             }
         }
     }
@@ -49,10 +64,11 @@ fn write_all(dir: &Path) -> usize {
             let mesh = Prism.generate(&preset.values, lod).unwrap();
             let doc = doc_of(&Prism, &preset.values, lod, Some(1));
             let glb = write_glb(&mesh, Some(&doc), &cameras).unwrap();
-            put(
-                format!("test_prism-{}-lod{}", preset.name, lod.index()),
-                glb,
-            );
+            let name = format!("test_prism-{}-lod{}", preset.name, lod.index());
+            let compact = GlbOptions { quantize: true };
+            let small = write_glb_with(&mesh, Some(&doc), &cameras, compact).unwrap();
+            put(format!("{name}.compact"), small);
+            put(name, glb);
         }
     }
     // One part of 70 000 vertices: u32 indices.

@@ -3,13 +3,16 @@
 // that name, every camera node as a PerspectiveCamera, and the generator state (scene extras) as
 // the scene's userData.
 //
+// A file `X.compact.glb` (quantised) beside `X.glb` must load to the same world-space bounding
+// box of every part, within the quantisation step (1/32767 of the part's size) plus 1e-6.
+//
 // Usage: node tests/gltf_three.mjs <dir>
 // Exits non-zero on a load failure, a missing part or camera, or an empty directory.
 
 import { readdirSync, readFileSync } from 'node:fs';
 import { join } from 'node:path';
 import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
-import { PropertyBinding } from 'three';
+import { Box3, PropertyBinding } from 'three';
 
 const dir = process.argv[2];
 if (!dir) {
@@ -30,6 +33,9 @@ function gltfJson(bytes) {
 }
 
 const loader = new GLTFLoader();
+/** World-space bounding box of each named mesh, by file. */
+const boxes = new Map();
+let compared = 0;
 let failed = 0;
 let parts = 0;
 let cameras = 0;
@@ -42,6 +48,12 @@ for (const file of files) {
     const gltf = await loader.parseAsync(ab, '');
     const found = { Mesh: new Set(), PerspectiveCamera: new Set() };
     gltf.scene.traverse((o) => found[o.type]?.add(o.name));
+    gltf.scene.updateMatrixWorld(true);
+    const byPart = new Map();
+    gltf.scene.traverse((o) => {
+      if (o.type === 'Mesh') byPart.set(o.name, new Box3().setFromObject(o));
+    });
+    boxes.set(file, byPart);
     for (const node of json.nodes ?? []) {
       // three.js sanitises node names for animation bindings (spaces become underscores).
       const name = PropertyBinding.sanitizeNodeName(node.name ?? '');
@@ -69,5 +81,24 @@ for (const file of files) {
     console.error(`${file}: ${problems.join('; ')}`);
   }
 }
+for (const file of files.filter((f) => f.endsWith('.compact.glb'))) {
+  const plain = boxes.get(file.replace(/\.compact\.glb$/, '.glb'));
+  const small = boxes.get(file);
+  if (!plain || !small) continue;
+  compared += 1;
+  for (const [name, box] of plain) {
+    const other = small.get(name);
+    const size = box.getSize(box.min.clone()).length();
+    const tol = size / 32767 + 1e-6;
+    const off = other
+      ? Math.max(box.min.distanceTo(other.min), box.max.distanceTo(other.max))
+      : Infinity;
+    if (!(off <= tol)) {
+      failed += 1;
+      console.error(`${file}: part "${name}" is ${off} away from the plain file's (tolerance ${tol})`);
+    }
+  }
+}
+console.log(`three.js GLTFLoader: ${compared} compact files placed like their plain ones`);
 console.log(`three.js GLTFLoader: ${files.length} files, ${parts} parts, ${cameras} cameras, ${failed} failed`);
 process.exit(failed > 0 ? 1 : 0);

@@ -135,6 +135,57 @@ fn render_reconstruct_eval_round_trip() {
     ]);
     assert!(said.contains("dish fitted"), "{said}");
     assert!(said.contains("photo-view IoU"), "{said}");
+    assert!(
+        said.contains("lod 2,"),
+        "the default level of detail is 2: {said}"
+    );
+
+    // Issue 17: `--lod` and OBJ out (with its MTL), from the same fit.
+    let (obj, obj_params) = (scratch("refit.obj"), scratch("refit-obj.json"));
+    let mtl = obj.with_extension("mtl");
+    let _ = std::fs::remove_file(&mtl);
+    let (said, _) = run_ok(&[
+        "reconstruct",
+        "--start",
+        s(&glb),
+        "--fov",
+        "0.5",
+        "--budget",
+        "300",
+        "--quality",
+        "0.5",
+        "--restarts",
+        "1",
+        "--lod",
+        "1",
+        s(&mask),
+        "-o",
+        s(&obj),
+        "--params-out",
+        s(&obj_params),
+    ]);
+    assert!(
+        said.contains("lod 1,") && said.contains("watertight"),
+        "{said}"
+    );
+    let fitted =
+        procfit::model::Model::from_json(&std::fs::read_to_string(&obj_params).unwrap()).unwrap();
+    assert_eq!(fitted.lod, procfit::generators::Lod::Medium);
+    let mesh = fitted
+        .generator
+        .generate(&fitted.params, fitted.lod)
+        .unwrap();
+    let back = procfit::glb::import_obj(&std::fs::read(&obj).unwrap()).unwrap();
+    assert_eq!(
+        back.triangles.len(),
+        mesh.triangles.len(),
+        "the OBJ is the lod 1 mesh"
+    );
+    assert!(
+        std::fs::read_to_string(&mtl)
+            .unwrap()
+            .contains("newmtl body")
+    );
     for (args, needle) in [
         (
             vec!["--generator", "building", "--start", s(&params)],
@@ -256,6 +307,19 @@ fn two_outputs_on_one_path_are_refused() {
         "-o and --params-out are the same file",
     );
     assert!(!glb.exists());
+    // The OBJ's material file is an output like the others.
+    let obj = scratch("twice.obj");
+    fails_with(
+        &[
+            "reconstruct",
+            "www/samples/mug.jpg",
+            "-o",
+            s(&obj),
+            "--params-out",
+            s(&obj.with_extension("mtl")),
+        ],
+        "the OBJ's material file and --params-out are the same file",
+    );
 }
 
 /// Issue 19: a missing output folder failed only after 12 s of fitting; now at once (the

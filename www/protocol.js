@@ -26,6 +26,9 @@ export const REQUESTS = Object.freeze({
   // { a: { generator, params }, b: { generator, params }, lod, side } → { iou }: the paper's
   // IoU-64 between two models (for the benchmark).
   IOU64: 'eval/iou64',
+  // { generator, params, lod, cameras, format: 'glb'|'obj'|'stl', compact, fileName } →
+  // { files: ArrayBuffer[] }: the model as the download menu saves it ([obj, mtl] for OBJ).
+  EXPORT_FILES: 'gen/export',
   // { generator, params, lod } → { text }: the params JSON of the model.
   PARAMS_JSON: 'model/json',
   // { bytes: ArrayBuffer } (a procfit GLB or params JSON) → { generator, params, lod, seed }.

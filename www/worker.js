@@ -30,6 +30,12 @@ const handlers = {
     // wasm-bindgen returns a fresh copy, so its buffer can be handed over without another copy.
     return new Transfer({ glb: bytes.buffer, ms }, [bytes.buffer]);
   },
+  [REQUESTS.EXPORT_FILES]: ({ generator, params, lod, cameras = [], format, compact = false, fileName }) => {
+    const files = wasm
+      .exportFiles(generator, Float64Array.from(params), lod, Float32Array.from(cameras), format, compact, fileName)
+      .map((bytes) => bytes.buffer);
+    return new Transfer({ files }, files);
+  },
   [REQUESTS.IOU64]: ({ a, b, lod = 1, side = 128 }) => ({
     iou: wasm.iou64Models(a.generator, Float64Array.from(a.params), b.generator, Float64Array.from(b.params), lod, side),
   }),
@@ -277,8 +283,10 @@ async function boot() {
   try {
     // Threads need SharedArrayBuffer, which needs a cross-origin isolated page (COOP/COEP);
     // served without those headers, the single-threaded build runs instead.
-    const mod = await import(self.crossOriginIsolated ? '../pkg/procfit.js' : '../pkg-st/procfit.js');
-    await mod.default();
+    const dir = self.crossOriginIsolated ? '../pkg/' : '../pkg-st/';
+    const mod = await import(`${dir}procfit.js`);
+    // One options object: wasm-bindgen warns about the old positional parameters.
+    await mod.default({ module_or_path: new URL(`${dir}procfit_bg.wasm`, import.meta.url) });
     if (mod.threaded()) {
       if (!self.crossOriginIsolated) {
         throw new Error('this build needs a cross-origin isolated page (COOP/COEP headers)');

@@ -19,7 +19,7 @@ use glam::{Vec2, Vec3};
 use gltf_json as json;
 use json::validation::{Checked::Valid, USize64};
 use std::borrow::Cow;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// Base-colour alpha of glass parts whose colour is opaque: "slightly transparent".
 const GLASS_ALPHA: f32 = 0.35;
@@ -44,6 +44,27 @@ pub fn write_glb(
     doc: Option<&ParamsDoc>,
     cameras: &[ExportCamera],
 ) -> Result<Vec<u8>, GlbError> {
+    write_glb_with(mesh, doc, cameras, GlbOptions::default())
+}
+
+/// How a GLB is encoded.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct GlbOptions {
+    /// `KHR_mesh_quantization`: positions as normalised int16 with the dequantising scale and
+    /// offset in each part's node, normals as normalised int8, texture coordinates as
+    /// normalised u16 (float where a part's lie outside 0–1): 16 bytes a vertex instead of 32.
+    /// The extension is then required, so only readers that know it open the file (three.js,
+    /// Blender, Babylon.js and glTF-Transform do).
+    pub quantize: bool,
+}
+
+/// Writes `mesh` as a GLB like [`write_glb`], encoded as `options` say.
+pub fn write_glb_with(
+    mesh: &Mesh,
+    doc: Option<&ParamsDoc>,
+    cameras: &[ExportCamera],
+    options: GlbOptions,
+) -> Result<Vec<u8>, GlbError> {
     mesh.check().map_err(|e| GlbError::Export(e.to_string()))?;
     if mesh.triangles.is_empty() {
         return Err(GlbError::Export("the mesh has no triangles".into()));
@@ -67,7 +88,8 @@ pub fn write_glb(
             continue;
         };
         let material = root.push(material(part));
-        let primitive = write_primitive(&mut root, &mut bin, &split, material)?;
+        let (primitive, transform) =
+            write_primitive(&mut root, &mut bin, &split, material, options.quantize)?;
         let mesh_index = root.push(json::Mesh {
             extensions: None,
             extras: None,
@@ -78,6 +100,8 @@ pub fn write_glb(
         part_nodes.push(root.push(json::Node {
             mesh: Some(mesh_index),
             name: Some(part.name.to_string()),
+            translation: transform.map(|(t, _)| t.to_array()),
+            scale: transform.map(|(_, s)| [s; 3]),
             ..Default::default()
         }));
     }
@@ -129,6 +153,11 @@ pub fn write_glb(
         nodes: scene_nodes,
     });
     root.scene = Some(scene);
+    if options.quantize {
+        let name = "KHR_mesh_quantization".to_string();
+        root.extensions_used.push(name.clone());
+        root.extensions_required.push(name);
+    }
 
     // The BIN chunk is padded to 4 bytes by the framing; the buffer length is the unpadded one.
     let buffer_length = bin.len();
@@ -182,9 +211,19 @@ fn split_part(mesh: &Mesh, part_id: usize) -> Option<SplitPart> {
     // Key: welded position index + exact bits of the corner's normal and uv. Insertion order
     // (first use) keeps the output deterministic.
     let mut seen: HashMap<(u32, [u32; 3], [u32; 2]), u32> = HashMap::new();
+    // A double-sided material shows both faces of each triangle, so a triangle that is an
+    // earlier one's reverse (the back of a leaf card) would be drawn twice: it is left out.
+    let double_sided = material(&mesh.parts[part_id]).double_sided;
+    let mut faces: HashSet<[u32; 3]> = HashSet::new();
     for (t, tri) in mesh.triangles.iter().enumerate() {
         if usize::from(mesh.tri_parts[t]) != part_id {
             continue;
+        }
+        if double_sided {
+            if faces.contains(&rotated_min_first([tri[0], tri[2], tri[1]])) {
+                continue;
+            }
+            faces.insert(rotated_min_first(*tri));
         }
         let corners = tri.map(|i| mesh.positions[i as usize]);
         let face = (corners[1] - corners[0])
@@ -211,14 +250,23 @@ fn split_part(mesh: &Mesh, part_id: usize) -> Option<SplitPart> {
     (!out.indices.is_empty()).then_some(out)
 }
 
+/// A triangle's corners rotated (winding kept) so the smallest index comes first: equal for
+/// the three rotations of one triangle.
+fn rotated_min_first(t: [u32; 3]) -> [u32; 3] {
+    let k = (0..3).min_by_key(|&k| t[k]).unwrap_or(0);
+    [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]
+}
+
 /// Appends the part's attributes and indices to `bin` (one buffer view each, 4-byte aligned)
-/// and returns the primitive that uses them.
+/// and returns the primitive that uses them; when `quantize`, also the part node's dequantising
+/// translation and uniform scale (uniform, so normals keep their directions).
 fn write_primitive(
     root: &mut json::Root,
     bin: &mut Vec<u8>,
     part: &SplitPart,
     material: json::Index<json::Material>,
-) -> Result<json::mesh::Primitive, GlbError> {
+    quantize: bool,
+) -> Result<(json::mesh::Primitive, Option<(Vec3, f32)>), GlbError> {
     use json::accessor::{ComponentType, GenericComponentType, Type};
     use json::buffer::Target;
 
@@ -228,9 +276,11 @@ fn write_primitive(
         .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| {
             (lo.min(p), hi.max(p))
         });
-    let floats = |v: Vec3| Some(json::Value::from(v.to_array().to_vec()));
+    let numbers = |v: &[f32]| Some(json::Value::from(v.to_vec()));
 
-    let mut view = |root: &mut json::Root, bytes: &[u8], target: Target| {
+    // Vertex attributes in one view each; `stride` is set where an element is not a multiple
+    // of 4 bytes (glTF aligns every vertex attribute element to 4).
+    let mut view = |root: &mut json::Root, bytes: &[u8], target: Target, stride: Option<usize>| {
         let offset = bin.len();
         bin.extend_from_slice(bytes);
         bin.resize(bin.len().next_multiple_of(4), 0);
@@ -238,71 +288,154 @@ fn write_primitive(
             buffer: json::Index::new(0),
             byte_length: USize64::from(bytes.len()),
             byte_offset: Some(USize64::from(offset)),
-            byte_stride: None,
+            byte_stride: stride.map(json::buffer::Stride),
             name: None,
             target: Some(Valid(target)),
             extensions: None,
             extras: None,
         })
     };
-    let accessor = |root: &mut json::Root,
-                    view: json::Index<json::buffer::View>,
-                    count: usize,
-                    component: ComponentType,
-                    type_: Type,
-                    min: Option<json::Value>,
-                    max: Option<json::Value>| {
-        root.push(json::Accessor {
-            buffer_view: Some(view),
-            byte_offset: None,
-            count: USize64::from(count),
-            component_type: Valid(GenericComponentType(component)),
-            extensions: None,
-            extras: None,
-            type_: Valid(type_),
-            min,
-            max,
-            name: None,
-            normalized: false,
-            sparse: None,
-        })
+    struct Layout {
+        component: ComponentType,
+        type_: Type,
+        normalized: bool,
+        min: Option<json::Value>,
+        max: Option<json::Value>,
+    }
+    let accessor =
+        |root: &mut json::Root, view: json::Index<json::buffer::View>, count: usize, l: Layout| {
+            root.push(json::Accessor {
+                buffer_view: Some(view),
+                byte_offset: None,
+                count: USize64::from(count),
+                component_type: Valid(GenericComponentType(l.component)),
+                extensions: None,
+                extras: None,
+                type_: Valid(l.type_),
+                min: l.min,
+                max: l.max,
+                name: None,
+                normalized: l.normalized,
+                sparse: None,
+            })
+        };
+    let float = |type_: Type| Layout {
+        component: ComponentType::F32,
+        type_,
+        normalized: false,
+        min: None,
+        max: None,
+    };
+    let f32_bytes = |values: &mut dyn Iterator<Item = f32>| -> Vec<u8> {
+        values.flat_map(f32::to_le_bytes).collect()
     };
 
     let n = part.positions.len();
-    let bytes: Vec<u8> = part
-        .positions
-        .iter()
-        .flat_map(|p| p.to_array())
-        .flat_map(f32::to_le_bytes)
-        .collect();
-    let v = view(root, &bytes, Target::ArrayBuffer);
-    let positions = accessor(
-        root,
-        v,
-        n,
-        ComponentType::F32,
-        Type::Vec3,
-        floats(lo),
-        floats(hi),
-    );
+    let (positions, transform) = if quantize {
+        // p = centre + scale · q / 32767 with q in int16: the node carries centre and scale.
+        let centre = (lo + hi) * 0.5;
+        let half = ((hi - lo) * 0.5).max_element();
+        let scale = if half > 0.0 && half.is_finite() {
+            half
+        } else {
+            1.0
+        };
+        let q: Vec<[i16; 3]> = part
+            .positions
+            .iter()
+            .map(|&p| {
+                ((p - centre) / scale * 32767.0)
+                    .round()
+                    .clamp(Vec3::splat(-32767.0), Vec3::splat(32767.0))
+                    .to_array()
+                    .map(|x| x as i16)
+            })
+            .collect();
+        let (qlo, qhi) = q
+            .iter()
+            .fold(([i16::MAX; 3], [i16::MIN; 3]), |(lo, hi), v| {
+                (
+                    [0, 1, 2].map(|k| lo[k].min(v[k])),
+                    [0, 1, 2].map(|k| hi[k].max(v[k])),
+                )
+            });
+        // Each element padded to 8 bytes.
+        let bytes: Vec<u8> = q
+            .iter()
+            .flat_map(|v| [v[0], v[1], v[2], 0])
+            .flat_map(i16::to_le_bytes)
+            .collect();
+        let v = view(root, &bytes, Target::ArrayBuffer, Some(8));
+        let ints = |v: [i16; 3]| Some(json::Value::from(v.map(i64::from).to_vec()));
+        let a = accessor(
+            root,
+            v,
+            n,
+            Layout {
+                component: ComponentType::I16,
+                type_: Type::Vec3,
+                normalized: true,
+                min: ints(qlo),
+                max: ints(qhi),
+            },
+        );
+        (a, Some((centre, scale)))
+    } else {
+        let bytes = f32_bytes(&mut part.positions.iter().flat_map(|p| p.to_array()));
+        let v = view(root, &bytes, Target::ArrayBuffer, None);
+        let layout = Layout {
+            min: numbers(&lo.to_array()),
+            max: numbers(&hi.to_array()),
+            ..float(Type::Vec3)
+        };
+        (accessor(root, v, n, layout), None)
+    };
 
-    let bytes: Vec<u8> = part
-        .normals
-        .iter()
-        .flat_map(|p| p.to_array())
-        .flat_map(f32::to_le_bytes)
-        .collect();
-    let v = view(root, &bytes, Target::ArrayBuffer);
-    let normals = accessor(root, v, n, ComponentType::F32, Type::Vec3, None, None);
+    let normals = if quantize {
+        let bytes: Vec<u8> = part
+            .normals
+            .iter()
+            .flat_map(|nrm| {
+                let q = (*nrm * 127.0).round().to_array().map(|x| x as i8 as u8);
+                [q[0], q[1], q[2], 0]
+            })
+            .collect();
+        let v = view(root, &bytes, Target::ArrayBuffer, Some(4));
+        let layout = Layout {
+            component: ComponentType::I8,
+            normalized: true,
+            ..float(Type::Vec3)
+        };
+        accessor(root, v, n, layout)
+    } else {
+        let bytes = f32_bytes(&mut part.normals.iter().flat_map(|p| p.to_array()));
+        let v = view(root, &bytes, Target::ArrayBuffer, None);
+        accessor(root, v, n, float(Type::Vec3))
+    };
 
-    let bytes: Vec<u8> = part
+    let unit_uvs = part
         .uvs
         .iter()
-        .flat_map(|p| p.to_array())
-        .flat_map(f32::to_le_bytes)
-        .collect();
-    let v = view(root, &bytes, Target::ArrayBuffer);
-    let uvs = accessor(root, v, n, ComponentType::F32, Type::Vec2, None, None);
+        .all(|uv| (0.0..=1.0).contains(&uv.x) && (0.0..=1.0).contains(&uv.y));
+    let uvs = if quantize && unit_uvs {
+        let bytes: Vec<u8> = part
+            .uvs
+            .iter()
+            .flat_map(|uv| (*uv * 65535.0).round().to_array())
+            .flat_map(|x| (x as u16).to_le_bytes())
+            .collect();
+        let v = view(root, &bytes, Target::ArrayBuffer, None);
+        let layout = Layout {
+            component: ComponentType::U16,
+            normalized: true,
+            ..float(Type::Vec2)
+        };
+        accessor(root, v, n, layout)
+    } else {
+        let bytes = f32_bytes(&mut part.uvs.iter().flat_map(|p| p.to_array()));
+        let v = view(root, &bytes, Target::ArrayBuffer, None);
+        accessor(root, v, n, float(Type::Vec2))
+    };
 
     // u16 indices when every index fits below 65535: the largest value of the type is reserved
     // (primitive restart) and glTF forbids it in index data.
@@ -319,16 +452,12 @@ fn write_primitive(
     } else {
         return Err(GlbError::Export(format!("{n} vertices in one part")));
     };
-    let v = view(root, &bytes, Target::ElementArrayBuffer);
-    let indices = accessor(
-        root,
-        v,
-        part.indices.len(),
+    let v = view(root, &bytes, Target::ElementArrayBuffer, None);
+    let layout = Layout {
         component,
-        Type::Scalar,
-        None,
-        None,
-    );
+        ..float(Type::Scalar)
+    };
+    let indices = accessor(root, v, part.indices.len(), layout);
 
     let attributes = [
         (json::mesh::Semantic::Positions, positions),
@@ -338,7 +467,7 @@ fn write_primitive(
     .into_iter()
     .map(|(s, a)| (Valid(s), a))
     .collect();
-    Ok(json::mesh::Primitive {
+    let primitive = json::mesh::Primitive {
         attributes,
         extensions: None,
         extras: None,
@@ -346,7 +475,8 @@ fn write_primitive(
         material: Some(material),
         mode: Valid(json::mesh::Mode::Triangles),
         targets: None,
-    })
+    };
+    Ok((primitive, transform))
 }
 
 /// What a part's material looks like, decided from its name and default colour.
@@ -375,9 +505,9 @@ fn look(part: &Part) -> Look {
     }
 }
 
-/// The PBR material of a part: base colour from [`Part::color`], dielectric.
-fn material(part: &Part) -> json::Material {
-    use json::material::{AlphaCutoff, AlphaMode, PbrBaseColorFactor, StrengthFactor};
+/// A part's linear RGBA base colour as every format writes it: [`Part::color`] clamped to
+/// 0–1, and glass given [`GLASS_ALPHA`] where its colour is opaque.
+pub(crate) fn base_color(part: &Part) -> [f32; 4] {
     // Colours come from code, but a NaN or an out-of-range value must not make an invalid file.
     let mut color = part.color.map(|c| {
         if c.is_finite() {
@@ -386,15 +516,20 @@ fn material(part: &Part) -> json::Material {
             1.0
         }
     });
+    if look(part) == Look::Glass && color[3] >= 1.0 {
+        color[3] = GLASS_ALPHA;
+    }
+    color
+}
+
+/// The PBR material of a part: base colour from [`base_color`], dielectric.
+fn material(part: &Part) -> json::Material {
+    use json::material::{AlphaCutoff, AlphaMode, PbrBaseColorFactor, StrengthFactor};
+    let color = base_color(part);
     let look = look(part);
     let (alpha_mode, alpha_cutoff, roughness, double_sided) = match look {
         Look::Opaque => (AlphaMode::Opaque, None, 0.6, false),
-        Look::Glass => {
-            if color[3] >= 1.0 {
-                color[3] = GLASS_ALPHA;
-            }
-            (AlphaMode::Blend, None, 0.05, true)
-        }
+        Look::Glass => (AlphaMode::Blend, None, 0.05, true),
         Look::Foliage => (AlphaMode::Mask, Some(AlphaCutoff(MASK_CUTOFF)), 0.7, true),
         Look::Translucent => (AlphaMode::Blend, None, 0.3, false),
     };

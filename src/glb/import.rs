@@ -88,6 +88,9 @@ impl ImportedGlb {
     }
 }
 
+/// The one required extension the importer reads (integer vertex attributes).
+const QUANTIZATION: &str = "KHR_mesh_quantization";
+
 /// Reads a reference mesh from GLB or OBJ bytes, told apart by the GLB magic.
 pub fn import_reference(bytes: &[u8]) -> Result<ReferenceMesh, GlbError> {
     if bytes.starts_with(b"glTF") {
@@ -149,6 +152,7 @@ pub fn import_glb(bytes: &[u8]) -> Result<ImportedGlb, GlbError> {
         mesh: ReferenceMesh::default(),
         cameras: Vec::new(),
         weld: HashMap::new(),
+        quantization: root.extensions_used.iter().any(|e| e == QUANTIZATION),
     };
     let mut visited = vec![false; root.nodes.len()];
     let mut stack: Vec<(usize, Mat4)> = roots.iter().rev().map(|&n| (n, Mat4::IDENTITY)).collect();
@@ -243,9 +247,15 @@ fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), GlbError> {
 /// Runs gltf-json's index and enum validation and reports the first few problems.
 fn validate(root: &json::Root) -> Result<(), GlbError> {
     use json::validation::Validate;
-    if let Some(ext) = root.extensions_required.first() {
+    // KHR_mesh_quantization only widens the accessor types positions may have, which the
+    // reader handles; anything else required is refused.
+    if let Some(ext) = root
+        .extensions_required
+        .iter()
+        .find(|e| e.as_str() != QUANTIZATION)
+    {
         return Err(GlbError::Unsupported(format!(
-            "the file requires extension {ext}, which procfit does not read (re-export it without compression or quantization)"
+            "the file requires extension {ext}, which procfit does not read (re-export it without compression)"
         )));
     }
     // gltf-json 1.4.1's primitive validation indexes `accessors[POSITION]` without a bounds
@@ -267,8 +277,18 @@ fn validate(root: &json::Root) -> Result<(), GlbError> {
     }
     let mut errors = Vec::new();
     root.validate(root, json::Path::new, &mut |path, error| {
+        let path = path();
+        // gltf-json does not know KHR_mesh_quantization and calls it unsupported; it is read.
+        if path.as_str().starts_with("extensionsRequired")
+            && root
+                .extensions_required
+                .iter()
+                .all(|e| e.as_str() == QUANTIZATION)
+        {
+            return;
+        }
         if errors.len() < 5 {
-            errors.push(format!("{}: {error}", path()));
+            errors.push(format!("{path}: {error}"));
         }
     });
     if errors.is_empty() {
@@ -300,6 +320,8 @@ struct Builder<'a> {
     cameras: Vec<ExportCamera>,
     /// Exact position bits → welded index.
     weld: HashMap<[u32; 3], u32>,
+    /// The file uses `KHR_mesh_quantization`: integer positions are allowed.
+    quantization: bool,
 }
 
 impl Builder<'_> {
@@ -418,14 +440,47 @@ impl Builder<'_> {
 
     fn read_positions(&self, accessor: usize, what: &str) -> Result<Vec<Vec3>, GlbError> {
         let a = self.accessor(accessor, what)?;
-        if a.component != ComponentType::F32 || a.type_ != Type::Vec3 || a.normalized {
-            return malformed(format!("{what}: POSITION must be a VEC3 float accessor"));
+        // KHR_mesh_quantization also allows (normalised or not) 8- and 16-bit integers; the
+        // node's transform dequantises them, as it does any position.
+        let quantized = self.quantization
+            && matches!(
+                a.component,
+                ComponentType::I8 | ComponentType::U8 | ComponentType::I16 | ComponentType::U16
+            );
+        if a.type_ != Type::Vec3
+            || !(quantized || (a.component == ComponentType::F32 && !a.normalized))
+        {
+            return malformed(format!(
+                "{what}: POSITION must be a VEC3 float accessor{}",
+                if self.quantization {
+                    " or an 8/16-bit integer one (KHR_mesh_quantization)"
+                } else {
+                    ""
+                }
+            ));
         }
         let mut out = Vec::with_capacity(a.count);
         for i in 0..a.count {
             let f = |k: usize| {
-                let at = i * a.stride + 4 * k;
-                f32::from_le_bytes([a.data[at], a.data[at + 1], a.data[at + 2], a.data[at + 3]])
+                let d = &a.data;
+                let at = i * a.stride + a.component.size() * k;
+                // glTF 2.0 §3.11: normalised integers map to [−1, 1] (signed, clamped) or [0, 1].
+                match (a.component, a.normalized) {
+                    (ComponentType::I8, n) => {
+                        let v = f32::from(d[at] as i8);
+                        if n { (v / 127.0).max(-1.0) } else { v }
+                    }
+                    (ComponentType::U8, n) => f32::from(d[at]) / if n { 255.0 } else { 1.0 },
+                    (ComponentType::I16, n) => {
+                        let v = f32::from(i16::from_le_bytes([d[at], d[at + 1]]));
+                        if n { (v / 32767.0).max(-1.0) } else { v }
+                    }
+                    (ComponentType::U16, n) => {
+                        f32::from(u16::from_le_bytes([d[at], d[at + 1]]))
+                            / if n { 65535.0 } else { 1.0 }
+                    }
+                    _ => f32::from_le_bytes([d[at], d[at + 1], d[at + 2], d[at + 3]]),
+                }
             };
             let p = Vec3::new(f(0), f(1), f(2));
             if !p.is_finite() {

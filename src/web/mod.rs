@@ -175,6 +175,45 @@ pub fn generate_glb(
     cameras: &[f32],
 ) -> Result<Vec<u8>, JsError> {
     let model = model_of(generator, params, lod)?;
+    let cameras = cameras_of(cameras)?;
+    crate::glb::export_model(&model, &cameras).map_err(js)
+}
+
+/// The page's download menu: the model in `format` (`glb`, `obj` or `stl`; `compact` for a
+/// quantised GLB), as the files to save: `[main]`, or for OBJ `[obj, mtl]`, the OBJ naming its
+/// MTL after `file_name` (the name the main file is saved as).
+#[wasm_bindgen(js_name = exportFiles)]
+pub fn export_files(
+    generator: &str,
+    params: &[f64],
+    lod: u8,
+    cameras: &[f32],
+    format: &str,
+    compact: bool,
+    file_name: &str,
+) -> Result<js_sys::Array, JsError> {
+    use crate::export::{ExportOptions, Format};
+    let model = model_of(generator, params, lod)?;
+    let cameras = cameras_of(cameras)?;
+    let format = Format::parse(format).map_err(|e| JsError::new(&e))?;
+    let (files, _) = crate::export::write_model(
+        &model,
+        &cameras,
+        format,
+        ExportOptions { compact },
+        std::path::Path::new(file_name),
+    )
+    .map_err(|e| JsError::new(&e.to_string()))?;
+    let out = js_sys::Array::new();
+    out.push(&js_sys::Uint8Array::from(files.main.as_slice()));
+    if let Some(companion) = files.companion {
+        out.push(&js_sys::Uint8Array::from(companion.as_slice()));
+    }
+    Ok(out)
+}
+
+/// The photo cameras of [`generate_glb`] and [`export_files`] (see [`CAMERA_FLOATS`]).
+fn cameras_of(cameras: &[f32]) -> Result<Vec<crate::glb::ExportCamera>, JsError> {
     if !cameras.len().is_multiple_of(CAMERA_FLOATS) {
         return Err(JsError::new(&format!(
             "{} camera numbers is not a multiple of {CAMERA_FLOATS}",
@@ -188,7 +227,7 @@ pub fn generate_glb(
         .enumerate()
         .map(|(i, c)| crate::glb::ExportCamera::from_floats(c, Some(format!("photo {}", i + 1))))
         .collect();
-    crate::glb::export_model(&model, &cameras).map_err(js)
+    Ok(cameras)
 }
 
 /// The paper's IoU-64 (mean silhouette IoU over 64 turntable views at `side`², both meshes

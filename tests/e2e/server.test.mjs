@@ -2,7 +2,8 @@
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import http from 'node:http';
-import { mkdtempSync, writeFileSync, symlinkSync, mkdirSync, rmSync } from 'node:fs';
+import { mkdtempSync, writeFileSync, symlinkSync, mkdirSync, rmSync, utimesSync } from 'node:fs';
+import { gunzipSync, brotliCompressSync, brotliDecompressSync } from 'node:zlib';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 import { spawnSync } from 'node:child_process';
@@ -10,6 +11,8 @@ import { startServer, ROOT } from './harness.mjs';
 
 let server;
 let root;
+const BIG_JS = Buffer.from('export const x = "procfit";\n'.repeat(400));
+const BIG_WASM = Buffer.concat([Buffer.from([0, 97, 115, 109, 1, 0, 0, 0]), Buffer.alloc(20000, 7)]);
 
 before(async () => {
   root = mkdtempSync(join(tmpdir(), 'procfit-serve-'));
@@ -25,6 +28,14 @@ before(async () => {
   symlinkSync(join(outside, 'secret.txt'), join(root, 'link-out.txt'));
   symlinkSync(outside, join(root, 'dir-out'));
   symlinkSync(join(root, 'sub', 'ok.txt'), join(root, 'link-in.txt'));
+  // Compression: a large script (gzipped on the fly), a wasm with a precompressed .br beside it,
+  // and a stale .br (older than its file) that must not be sent.
+  writeFileSync(join(root, 'big.js'), BIG_JS);
+  writeFileSync(join(root, 'big.wasm'), BIG_WASM);
+  writeFileSync(join(root, 'big.wasm.br'), brotliCompressSync(BIG_WASM));
+  writeFileSync(join(root, 'stale.js'), BIG_JS);
+  writeFileSync(join(root, 'stale.js.br'), brotliCompressSync(Buffer.from('old contents')));
+  utimesSync(join(root, 'stale.js.br'), new Date(2000, 0, 1), new Date(2000, 0, 1));
   server = await startServer({ root });
 });
 
@@ -34,13 +45,16 @@ after(() => {
 });
 
 /** A raw GET: node's http does not normalise the path, so `..` reaches the server as sent. */
-function get(path) {
+function get(path, headers = {}) {
   const { port } = new URL(server.url);
   return new Promise((resolve, reject) => {
-    const req = http.request({ host: '127.0.0.1', port, path, method: 'GET' }, (res) => {
-      let body = '';
-      res.on('data', (d) => (body += d));
-      res.on('end', () => resolve({ status: res.statusCode, headers: res.headers, body }));
+    const req = http.request({ host: '127.0.0.1', port, path, method: 'GET', headers }, (res) => {
+      const chunks = [];
+      res.on('data', (d) => chunks.push(d));
+      res.on('end', () => {
+        const bytes = Buffer.concat(chunks);
+        resolve({ status: res.statusCode, headers: res.headers, body: bytes.toString(), bytes });
+      });
     });
     req.on('error', reject);
     req.end();
@@ -139,4 +153,38 @@ test('a busy port gets a one-line message that suggests PORT=', () => {
   assert.notEqual(r.status, 0);
   assert.match(r.stderr, /busy.*PORT=/);
   assert.equal(r.stderr.trim().split('\n').length, 1);
+});
+
+// Issue 17: the dev server compresses by Accept-Encoding, and keeps COOP/COEP on those replies.
+test('compression follows Accept-Encoding, precompressed files first, never a stale one', async () => {
+  const isolated = (res) => {
+    assert.equal(res.headers['cross-origin-opener-policy'], 'same-origin');
+    assert.equal(res.headers['cross-origin-embedder-policy'], 'require-corp');
+    assert.equal(res.headers.vary, 'Accept-Encoding');
+  };
+  let res = await get('/big.js', { 'Accept-Encoding': 'gzip, deflate, br' });
+  assert.equal(res.headers['content-encoding'], 'gzip', 'no .br beside it: gzip on the fly');
+  assert.deepEqual(gunzipSync(res.bytes), BIG_JS);
+  assert.ok(res.bytes.length < BIG_JS.length / 10, `${res.bytes.length} bytes`);
+  assert.equal(Number(res.headers['content-length']), res.bytes.length);
+  isolated(res);
+
+  res = await get('/big.wasm', { 'Accept-Encoding': 'gzip, br' });
+  assert.equal(res.headers['content-encoding'], 'br');
+  assert.equal(res.headers['content-type'], 'application/wasm');
+  assert.deepEqual(brotliDecompressSync(res.bytes), BIG_WASM);
+  isolated(res);
+
+  res = await get('/big.wasm', { 'Accept-Encoding': 'br;q=0, gzip' });
+  assert.equal(res.headers['content-encoding'], 'gzip', 'br refused with q=0');
+  assert.deepEqual(gunzipSync(res.bytes), BIG_WASM);
+
+  res = await get('/big.wasm');
+  assert.equal(res.headers['content-encoding'], undefined, 'no Accept-Encoding: identity');
+  assert.deepEqual(res.bytes, BIG_WASM);
+  isolated(res);
+
+  res = await get('/stale.js', { 'Accept-Encoding': 'br' });
+  assert.equal(res.headers['content-encoding'], undefined, 'a .br older than its file is not sent');
+  assert.deepEqual(res.bytes, BIG_JS);
 });
