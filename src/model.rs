@@ -172,3 +172,29 @@ impl Model {
         serde_json::to_string_pretty(&self.to_doc()).unwrap_or_default()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A dish saved before the saucer (version 1, no saucer parameters) opens as the same cup
+    /// without a saucer, and a document of a newer version than this procfit knows is refused.
+    #[test]
+    fn dish_params_of_version_1_open_without_a_saucer() {
+        let g = generators::by_name("dish").unwrap_or_else(|| panic!("dish"));
+        let mug = g.presets()[0].values.clone();
+        let mut doc = Model::new("dish", &mug, Lod::Low)
+            .unwrap_or_else(|e| panic!("{e}"))
+            .to_doc();
+        doc.version = 1;
+        doc.params
+            .retain(|k, _| !k.starts_with("saucer_") && k != "has_saucer");
+        let m = Model::from_doc(&doc).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(m.params, mug);
+        doc.version = g.version() + 1;
+        let Err(e) = Model::from_doc(&doc) else {
+            panic!("a newer version was accepted")
+        };
+        assert!(e.0.contains("this procfit knows version"), "{e}");
+    }
+}

@@ -861,6 +861,7 @@ fn generator_specs_serialise_as_the_page_reads_them() {
         preset["values"].as_array().unwrap().len(),
         dish.params().len()
     );
+}
 
 /// Issue 17: a compact GLB (`KHR_mesh_quantization`) opens again: the same model, and the same
 /// welded mesh within the quantisation step (1/32767 of each part's half-size).

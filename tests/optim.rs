@@ -395,3 +395,45 @@ fn memetic_restarts_when_the_population_collapses() {
     calm.run(&with_grad(mixed));
     assert_eq!(calm.status().restarts, 0);
 }
+
+/// Extra seeds (a cup's saucer) change nothing when none beats the best regular seed — the
+/// same best point, the same evaluation count — and join the run when one does.
+#[test]
+fn extra_seeds_join_only_when_better_than_every_seed() {
+    let seeds: Vec<Vec<f64>> = (0..100)
+        .map(|i| {
+            let t = f64::from(i) / 100.0;
+            vec![-4.0 + 8.0 * t, 4.0 - 8.0 * t, 0.0, 0.0, 1.0, 1.0, 1.0]
+        })
+        .collect();
+    let config = MemeticConfig {
+        max_evaluations: 600,
+        ..MemeticConfig::default()
+    };
+    let plain = {
+        let mut m = Memetic::new(mixed_domain(), &seeds, config).unwrap();
+        m.run(&with_grad(mixed));
+        m
+    };
+    let worse = vec![vec![4.0, 4.0, 1.0, 1.0, 0.0, 1.0, 1.0]; 3];
+    let best_seed = seeds
+        .iter()
+        .map(|s| mixed(s, None))
+        .fold(f64::INFINITY, f64::min);
+    assert!(worse.iter().all(|w| mixed(w, None) > best_seed));
+    let mut m = Memetic::new(mixed_domain(), &seeds, config)
+        .unwrap()
+        .with_extra_seeds(&worse, 0..0)
+        .unwrap();
+    m.run(&with_grad(mixed));
+    assert_eq!(m.status().evaluations, plain.status().evaluations);
+    assert_eq!(m.best().unwrap().x, plain.best().unwrap().x);
+    // A better extra joins: the run's best is at least as good as that extra.
+    let optimum: Vec<f64> = CONT_TARGET.iter().chain(&DISC_TARGET).copied().collect();
+    let mut m = Memetic::new(mixed_domain(), &seeds, config)
+        .unwrap()
+        .with_extra_seeds(std::slice::from_ref(&optimum), 0..0)
+        .unwrap();
+    m.run(&with_grad(mixed));
+    assert!(m.best().unwrap().value <= mixed(&optimum, None) + 1e-12);
+}

@@ -249,6 +249,50 @@ fn measured_mug_from_obj_reconstructs() {
     let iou = fit_iou64(&r, &mesh, &truth);
     eprintln!("measured mug: IoU-64 {iou:.4}");
     assert!(iou >= 0.93, "measured mug: IoU-64 {iou:.4} < 0.93");
+    assert_eq!(
+        param(&r, "has_saucer"),
+        0.0,
+        "a saucer was fitted under a bare mug"
+    );
+}
+
+/// The value of the fitted parameter `name`.
+fn param(r: &procfit::reconstruct::FitResult, name: &str) -> f64 {
+    let g = r.model.generator;
+    let i = g.params().iter().position(|s| s.name == name).unwrap();
+    r.model.params[i]
+}
+
+/// Issue 16: a mug on a saucer (both lathed from measured dimensions, not by the generator),
+/// photographed from 26° and from 50° above: the fit puts a saucer under the mug. Measured
+/// IoU-64 0.799 and 0.783: the saucer comes out too low (0.05 for 0.17) and the mug too short — one view's ambiguity between the saucer's height, its width and the
+/// camera's elevation, which the silhouette alone does not settle (issue 16's "views from
+/// above" and "one-photo ambiguity" are what is left).
+#[test]
+fn measured_mug_on_a_saucer_gets_a_saucer() {
+    let mesh = measured_mug_on_saucer();
+    for (seed, pitch) in [(41, 0.45), (42, 0.87)] {
+        let mut rng = Rng::new(seed);
+        let truth = view_at(&mut rng, &mesh, 0.5, 0.0, pitch);
+        let mask = render_mask(&mesh, &truth, 256);
+        let r = fit(config(1, 1.0), vec![mask]);
+        let iou = fit_iou64(&r, &mesh, &truth);
+        let saucer = param(&r, "has_saucer");
+        eprintln!(
+            "mug on a saucer, pitch {pitch}: IoU-64 {iou:.4}, has_saucer {saucer}, radius {:.3}, \
+             height {:.3}, well {:.3}, y_scale {:.3}, r0 {:.3}",
+            param(&r, "saucer_radius"),
+            param(&r, "saucer_height"),
+            param(&r, "saucer_well"),
+            param(&r, "y_scale"),
+            r.model.params[0]
+        );
+        assert_eq!(
+            saucer, 1.0,
+            "pitch {pitch}: no saucer fitted (IoU-64 {iou:.4})"
+        );
+        assert!(iou >= 0.7, "pitch {pitch}: IoU-64 {iou:.4} < 0.7");
+    }
 }
 
 #[test]
@@ -287,7 +331,7 @@ fn session_reports_progress_and_can_stop_early() {
         last_work = p.work_done;
         stages.push(p.stage);
         assert!(p.best_loss.is_finite());
-        assert_eq!(p.params.len(), 53);
+        assert_eq!(p.params.len(), procfit::generators::dish::N_PARAMS);
         assert_eq!(p.cameras.len(), 1);
         // The preview is the best silhouette at ≤ 128 a side, in the mask's aspect.
         let preview = s.preview().expect("a preview");
@@ -418,4 +462,33 @@ fn a_quick_fit_is_one_run_for_the_page_and_the_cli_alike() {
     );
     assert_eq!(FitConfig::restarts_for_quality(3.0), DEFAULT_RESTARTS);
     assert_eq!(FitConfig::default().restarts, DEFAULT_RESTARTS);
+}
+
+/// The generator's own cup on a saucer from the same two cameras: the saucer is found and the
+/// whole reaches IoU-64 ≥ 0.85. The silhouette is matched almost exactly (loss < 0.001); what
+/// is left is one view's ambiguity between the saucer's radius, its height and the camera's
+/// elevation (measured 0.951 and 0.912).
+#[test]
+fn own_cup_on_a_saucer_gets_its_saucer() {
+    let g = generator("dish");
+    let p = g
+        .presets()
+        .into_iter()
+        .find(|p| p.name == "tea_cup_on_saucer")
+        .unwrap()
+        .values;
+    let mesh = mesh_of("dish", &p, Lod::High);
+    for (seed, pitch) in [(41, 0.45), (42, 0.87)] {
+        let mut rng = Rng::new(seed);
+        let truth = view_at(&mut rng, &mesh, 0.5, 0.0, pitch);
+        let r = fit(config(1, 1.0), vec![render_mask(&mesh, &truth, 256)]);
+        let iou = fit_iou64(&r, &mesh, &truth);
+        eprintln!("own cup on a saucer, pitch {pitch}: IoU-64 {iou:.4}");
+        assert_eq!(
+            param(&r, "has_saucer"),
+            1.0,
+            "pitch {pitch}: no saucer fitted"
+        );
+        assert!(iou >= 0.85, "pitch {pitch}: IoU-64 {iou:.4} < 0.85");
+    }
 }

@@ -1350,6 +1350,7 @@ fn a_photo_cropped_to_its_object_is_flagged() {
             seg.warnings
         );
     }
+}
 
 #[test]
 fn the_wall_brush_erases_windows_and_nothing_else() {

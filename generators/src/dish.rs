@@ -1,6 +1,6 @@
 //! The dish generator (cups, mugs, bowls, plates, tumblers, vases): paper §3.3, Algorithm 1,
-//! with the reference implementation's 53 parameters, written once over [`Scalar`] so the mesh
-//! and its vector–Jacobian product come from the same code.
+//! with the reference implementation's 53 parameters and four of ours for a saucer, written once
+//! over [`Scalar`] so the mesh and its vector–Jacobian product come from the same code.
 //!
 //! # Shape
 //! - **Body**: a profile curve lathed around +Y. Nine radii (`profile_radius_i`, in units of
@@ -72,8 +72,16 @@ pub const P_HANDLE_CENTER: usize = 12;
 pub const P_SWEEP: usize = 13;
 /// Index of the first handle thickness multiplier (20 of them).
 pub const P_MULT: usize = 33;
+/// Index of `has_saucer`.
+pub const P_HAS_SAUCER: usize = 53;
+/// Index of `saucer_radius` (a multiple of the body's bottom radius).
+pub const P_SAUCER_RADIUS: usize = 54;
+/// Index of `saucer_height` (the rim's height, in units of [`HEIGHT_UNIT`]).
+pub const P_SAUCER_HEIGHT: usize = 55;
+/// Index of `saucer_well` (the flat well's radius, a share of the saucer's radius).
+pub const P_SAUCER_WELL: usize = 56;
 /// Number of parameters.
-pub const N_PARAMS: usize = 53;
+pub const N_PARAMS: usize = 57;
 
 const SWEEP_NAMES: [&str; 20] = [
     "handle_radius_00",
@@ -256,11 +264,42 @@ fn spec() -> &'static [ParamSpec] {
                 1.0,
             ));
         }
+        s.push(ParamSpec {
+            kind: ParamKind::Boolean,
+            ..c("has_saucer", "Has saucer", "Saucer", "", 0.0, 1.0, 0.0)
+        });
+        s.push(c(
+            "saucer_radius",
+            "Saucer radius (× foot)",
+            "Saucer",
+            "",
+            1.3,
+            5.0,
+            2.4,
+        ));
+        s.push(c(
+            "saucer_height",
+            "Saucer height",
+            "Saucer",
+            "",
+            0.02,
+            0.2,
+            0.06,
+        ));
+        s.push(c(
+            "saucer_well",
+            "Saucer well (share)",
+            "Saucer",
+            "",
+            0.25,
+            0.8,
+            0.45,
+        ));
         s
     })
 }
 
-const PARTS: [Part; 2] = [
+const PARTS: [Part; 3] = [
     Part {
         name: "body",
         color: [0.85, 0.82, 0.76, 1.0],
@@ -269,7 +308,29 @@ const PARTS: [Part; 2] = [
         name: "handle",
         color: [0.80, 0.77, 0.70, 1.0],
     },
+    Part {
+        name: "saucer",
+        color: [0.88, 0.86, 0.82, 1.0],
+    },
 ];
+
+/// A saucer under the body: radius (× the body's bottom radius), rim height and well share.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SaucerShape {
+    /// `saucer_radius`.
+    pub radius: f64,
+    /// `saucer_height`.
+    pub height: f64,
+    /// `saucer_well`.
+    pub well: f64,
+}
+
+/// The saucer the presets and seeds use: about 2.4 times the cup's foot, a low rim.
+pub const SAUCER: SaucerShape = SaucerShape {
+    radius: 2.4,
+    height: 0.06,
+    well: 0.45,
+};
 
 /// A body shape: nine profile radii and the height scale.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -402,6 +463,17 @@ pub fn compose(body: &BodyShape, handle: Option<&HandleShape>) -> Vec<f64> {
     v.push(h.center);
     v.extend_from_slice(&h.radii);
     v.extend_from_slice(&h.mults);
+    v.extend([0.0, SAUCER.radius, SAUCER.height, SAUCER.well]);
+    v
+}
+
+/// [`compose`] standing on a saucer.
+pub fn on_saucer(body: &BodyShape, handle: Option<&HandleShape>, saucer: &SaucerShape) -> Vec<f64> {
+    let mut v = compose(body, handle);
+    v[P_HAS_SAUCER] = 1.0;
+    v[P_SAUCER_RADIUS] = saucer.radius;
+    v[P_SAUCER_HEIGHT] = saucer.height;
+    v[P_SAUCER_WELL] = saucer.well;
     v
 }
 
@@ -545,8 +617,43 @@ impl Model for Dish {
         if p[P_HAS_HANDLE].val() > 0.5 {
             handle(&mut b, p, &wall, height, 6 * q);
         }
+        if p[P_HAS_SAUCER].val() > 0.5 {
+            // The cup stands in the saucer's well: lift it, then lathe the saucer below.
+            let sp = saucer_profile(p, r0);
+            let lift = sp[sp.len() - 1].1;
+            for v in &mut b.pos {
+                v[1] = v[1] + lift;
+            }
+            lathe(&mut b, &sp, 12 * q, 2, 3);
+        }
         Ok(b)
     }
+}
+
+/// The saucer's profile, outer pole → rim → inner pole, as (r, y): a foot ring on the ground,
+/// the underside rising to the rim, a rounded rim lip, the top falling to the flat well. Its
+/// radius is `saucer_radius` × the body's bottom radius `r0`, so a cup keeps its saucer when it
+/// is scaled; the well's top (the last point) is where the cup stands.
+fn saucer_profile<S: Scalar>(p: &[S], r0: S) -> Vec<(S, S)> {
+    let zero = S::cst(0.0);
+    let r = p[P_SAUCER_RADIUS] * r0;
+    let h = p[P_SAUCER_HEIGHT] * HEIGHT_UNIT;
+    let rw = p[P_SAUCER_WELL] * r;
+    // Thickness of the plate: a third of the rim height, at most a wall and a tenth of the
+    // radius (so the rim never folds over the well).
+    let t = (h * (1.0 / 3.0)).min(S::cst(WALL)).min(r * 0.1);
+    let rf = rw * 0.8;
+    vec![
+        (zero, zero),
+        (rf, zero),
+        (rw, t * 0.5),
+        (r - t, h - t),
+        (r, h - t * 0.5),
+        (r - t * 0.5, h),
+        (r - t * 1.5, h),
+        (rw, t),
+        (zero, t),
+    ]
 }
 
 /// Revolves a profile from pole to pole (first and last points on the axis) around +Y in `n`
@@ -714,8 +821,9 @@ impl Generator for Dish {
     fn label(&self) -> &'static str {
         "Dish (cup, mug, bowl, plate, glass, vase)"
     }
+    /// 2: the saucer (params of version 1 read as a cup without one).
     fn version(&self) -> u32 {
-        1
+        2
     }
     fn params(&self) -> &[ParamSpec] {
         spec()
@@ -743,6 +851,11 @@ impl Generator for Dish {
                 values: compose(&BODIES[0], by_name(h)),
             });
         }
+        out.push(Preset {
+            name: "tea_cup_on_saucer",
+            label: "Tea cup on a saucer",
+            values: on_saucer(&BODIES[1], by_name("ear"), &SAUCER),
+        });
         out
     }
 
@@ -760,6 +873,19 @@ impl Generator for Dish {
             out.push(compose(b, None));
         }
         out
+    }
+
+    /// The mug and the tea cup on a saucer, with their usual handle and without one: tried
+    /// only when a saucer explains the photo better than every bare dish.
+    fn extra_seeds(&self) -> (Vec<Vec<f64>>, std::ops::Range<usize>) {
+        let handles = handle_shapes();
+        let mut out = Vec::new();
+        for b in &BODIES[..2] {
+            let h = b.handle.and_then(|n| handles.iter().find(|h| h.name == n));
+            out.push(on_saucer(b, h, &SAUCER));
+            out.push(on_saucer(b, None, &SAUCER));
+        }
+        (out, P_HAS_SAUCER..N_PARAMS)
     }
 
     fn differentiable(&self) -> bool {

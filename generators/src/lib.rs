@@ -412,6 +412,15 @@ pub trait Generator: Send + Sync {
         (0.0, vec![0.0; params.len()])
     }
 
+    /// Seeds with an optional part that no regular seed has (a cup's saucer), and the range of
+    /// parameters only that part uses: stage 1 screens the extras after [`Generator::seeds`]
+    /// and keeps them only when one fits the views better than every regular seed; until then
+    /// those parameters are not searched, so a photo without such a part is fitted exactly as
+    /// if they did not exist. Defaults to none.
+    fn extra_seeds(&self) -> (Vec<Vec<f64>>, std::ops::Range<usize>) {
+        (Vec::new(), 0..0)
+    }
+
     /// The initial population the memetic optimiser starts from (paper §3.2: presets are
     /// concatenated into the initial population). Defaults to the presets' values.
     fn seeds(&self) -> Vec<Vec<f64>> {

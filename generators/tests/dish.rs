@@ -19,9 +19,12 @@ fn vjp_matches_finite_differences_for_every_preset_at_two_lods() {
         for lod in [Lod::Low, Lod::Medium] {
             let what = format!("{} {lod:?}", preset.name);
             let moving = check_gradient(&Dish, &preset.values, lod, &what);
-            // Every body parameter moves the mesh; with a handle, every handle parameter too.
+            // Every body parameter moves the mesh; with a handle, every handle parameter too,
+            // and with a saucer its three continuous parameters.
             let has_handle = preset.values[dish::P_HAS_HANDLE] > 0.5;
-            let expected = 10 + if has_handle { n_handle } else { 0 };
+            let has_saucer = preset.values[dish::P_HAS_SAUCER] > 0.5;
+            let expected =
+                10 + if has_handle { n_handle } else { 0 } + if has_saucer { 3 } else { 0 };
             assert_eq!(moving, expected, "{what}: parameters that move the mesh");
         }
     }
@@ -37,6 +40,8 @@ fn every_preset_and_lod_gives_a_valid_mesh() {
             }
             let has_handle = preset.values[dish::P_HAS_HANDLE] > 0.5;
             assert_eq!(m.tri_parts.contains(&1), has_handle, "{}", preset.name);
+            let has_saucer = preset.values[dish::P_HAS_SAUCER] > 0.5;
+            assert_eq!(m.tri_parts.contains(&2), has_saucer, "{}", preset.name);
         }
     }
 }
@@ -362,7 +367,7 @@ fn bad_input_is_an_error_not_a_panic() {
     assert_eq!(
         Dish.generate(&p[..5], Lod::Low).err(),
         Some(GenError::WrongLength {
-            expected: 53,
+            expected: dish::N_PARAMS,
             got: 5
         })
     );
@@ -381,7 +386,7 @@ fn bad_input_is_an_error_not_a_panic() {
     assert_eq!(Dish.generate(&big, Lod::Low), Dish.generate(&end, Lod::Low));
     // A wrong adjoint length is an error.
     let (_, vjp) = Dish.generate_with_vjp(&end, Lod::Low).expect("vjp");
-    let mut g = vec![0.0; 53];
+    let mut g = vec![0.0; dish::N_PARAMS];
     assert!(vjp.vjp(&[glam::Vec3::ZERO; 3], &mut g).is_err());
 }
 
@@ -391,6 +396,11 @@ fn seeds_are_bodies_times_handles_plus_handleless() {
     assert_eq!(seeds.len(), 6 * 4 + 6);
     let with_handle = seeds.iter().filter(|s| s[dish::P_HAS_HANDLE] > 0.5).count();
     assert_eq!(with_handle, 24);
+    assert!(seeds.iter().all(|s| s[dish::P_HAS_SAUCER] < 0.5));
+    let (extras, own) = Dish.extra_seeds();
+    assert_eq!(extras.len(), 4);
+    assert_eq!(own, dish::P_HAS_SAUCER..dish::N_PARAMS);
+    assert!(extras.iter().all(|s| s[dish::P_HAS_SAUCER] > 0.5));
     for s in &seeds {
         assert_eq!(
             procfit_generators::sanitize_params(Dish.params(), s).as_ref(),

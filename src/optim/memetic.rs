@@ -173,6 +173,14 @@ pub struct Memetic {
     /// Seeds still to be screened (only when there are more seeds than places).
     to_screen: Vec<Vec<f64>>,
     screened: Vec<Individual>,
+    /// Extra seeds ([`Memetic::with_extra_seeds`]), screened after the others.
+    extras: Vec<Vec<f64>>,
+    /// The variables mutation, crossover and random restarts change: all of them, or while
+    /// extra seeds are pending or were dropped, those not frozen at the regular seeds' shared
+    /// value (so the random stream is the one a run without the extras' variables draws).
+    active: Vec<usize>,
+    /// The frozen variables' values (empty when nothing is frozen).
+    frozen: Vec<(usize, f64)>,
     /// Starting individuals still to be polished and inserted.
     to_polish: Vec<Vec<f64>>,
     population: Vec<Individual>,
@@ -196,6 +204,7 @@ impl Memetic {
             .iter()
             .map(|s| domain.check(s))
             .collect::<Result<Vec<_>, _>>()?;
+        let n_vars = domain.vars().len();
         let mut m = Memetic {
             domain,
             config,
@@ -203,6 +212,9 @@ impl Memetic {
             seeds: seeds.clone(),
             to_screen: Vec::new(),
             screened: Vec::new(),
+            extras: Vec::new(),
+            active: (0..n_vars).collect(),
+            frozen: Vec::new(),
             to_polish: Vec::new(),
             population: Vec::new(),
             best: None,
@@ -221,17 +233,55 @@ impl Memetic {
         Ok(m)
     }
 
+    /// Seeds with something no regular seed has (a cup's saucer), and the variables only they
+    /// use (`own`): the extras are screened after the regular seeds and join only when one of
+    /// them is better than every regular seed. Until then, and for good when none is, `own`
+    /// stays at the regular seeds' values and out of mutation and crossover, the extras'
+    /// evaluations are not counted, and the run draws the same random numbers as a run over
+    /// the other variables alone. With no more seeds than places (no screening), the extras
+    /// simply join the seeds. Errors on extras of the wrong length or with non-finite values.
+    pub fn with_extra_seeds(
+        mut self,
+        extras: &[Vec<f64>],
+        own: std::ops::Range<usize>,
+    ) -> Result<Memetic, OptimError> {
+        let extras = extras
+            .iter()
+            .map(|s| self.domain.check(s))
+            .collect::<Result<Vec<_>, _>>()?;
+        if extras.is_empty() {
+            return Ok(self);
+        }
+        if self.to_screen.is_empty() {
+            let mut seeds = self.seeds.clone();
+            seeds.extend(extras);
+            return Memetic::new(self.domain, &seeds, self.config);
+        }
+        // The extras' own variables stay at the regular seeds' value unless an extra joins.
+        let first = &self.seeds[0];
+        let own = own.start.min(first.len())..own.end.min(first.len());
+        let frozen: Vec<(usize, f64)> = own.clone().map(|i| (i, first[i])).collect();
+        self.active = (0..first.len()).filter(|i| !own.contains(i)).collect();
+        self.frozen = frozen;
+        self.extras = extras;
+        Ok(self)
+    }
+
     /// `count` new starting points: mutated copies of `from` (cycled), mutation rate and sigma
     /// multiplied by `strength`; uniformly random points when `from` is empty.
     fn fill(&mut self, from: &[Vec<f64>], count: usize, strength: f64) -> Vec<Vec<f64>> {
         (0..count)
             .map(|i| {
                 if from.is_empty() {
-                    self.domain
-                        .vars()
-                        .iter()
-                        .map(|v| v.clamp(self.rng.range(v.min, v.max)))
-                        .collect()
+                    let vars = self.domain.vars().to_vec();
+                    let mut x: Vec<f64> = vars.iter().map(|v| v.min).collect();
+                    for &i in &self.active {
+                        x[i] = vars[i].clamp(self.rng.range(vars[i].min, vars[i].max));
+                    }
+                    for &(i, v) in &self.frozen {
+                        x[i] = v;
+                    }
+                    x
                 } else {
                     let mut x = from[i % from.len()].clone();
                     self.mutate(&mut x, strength);
@@ -246,13 +296,13 @@ impl Memetic {
         let rate = (self.config.mutation_rate * strength).min(1.0);
         let sigma = self.config.mutation_sigma * strength;
         let mut changed = false;
-        for i in 0..x.len() {
+        for k in 0..self.active.len() {
             if self.rng.chance(rate) {
-                changed |= self.mutate_gene(x, i, sigma);
+                changed |= self.mutate_gene(x, self.active[k], sigma);
             }
         }
-        if !changed {
-            let i = self.rng.below(x.len());
+        if !changed && !self.active.is_empty() {
+            let i = self.active[self.rng.below(self.active.len())];
             self.mutate_gene(x, i, sigma);
         }
     }
@@ -430,6 +480,31 @@ impl Memetic {
             .collect();
         let done = self.run_jobs(objective, jobs);
         self.screened.extend(done);
+        if self.to_screen.is_empty() && !self.extras.is_empty() {
+            let best = self
+                .screened
+                .iter()
+                .map(|i| i.value)
+                .fold(f64::INFINITY, f64::min);
+            let before = self.evaluations;
+            let jobs = std::mem::take(&mut self.extras)
+                .into_iter()
+                .map(|x| Job {
+                    x,
+                    iterations: 0,
+                    adam: self.config.polish,
+                })
+                .collect();
+            let extras = self.run_jobs(objective, jobs);
+            if extras.iter().any(|i| i.value < best) {
+                self.screened.extend(extras);
+                self.active = (0..self.domain.vars().len()).collect();
+                self.frozen.clear();
+            } else {
+                // Dropped: as if never evaluated (`best` did not change, none was better).
+                self.evaluations = before;
+            }
+        }
         if self.to_screen.is_empty() {
             // Keep the best `population` seeds (stable sort: ties keep seed order) and polish.
             let mut screened = std::mem::take(&mut self.screened);
@@ -468,10 +543,11 @@ impl Memetic {
             let a = self.tournament();
             let b = self.tournament();
             let mut child = self.population[a].x.clone();
-            if self.rng.chance(self.config.crossover_rate) && child.len() > 1 {
+            if self.rng.chance(self.config.crossover_rate) && self.active.len() > 1 {
                 // One-point crossover: genes before the cut from the first parent, the rest
-                // from the second.
-                let cut = 1 + self.rng.below(child.len() - 1);
+                // from the second (the cut drawn among the active genes; frozen ones are the
+                // same in every individual).
+                let cut = self.active[1 + self.rng.below(self.active.len() - 1)];
                 child[cut..].copy_from_slice(&self.population[b].x[cut..]);
             }
             self.mutate(&mut child, 1.0);

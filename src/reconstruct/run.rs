@@ -112,12 +112,22 @@ impl Run {
         for (k, &g) in candidates.iter().enumerate() {
             let (layout, domain, seeds) = start_points(
                 g,
+                g.seeds(),
                 start.as_deref(),
                 stats,
                 &fov,
                 config.fit_fov,
                 windows.is_none(),
             )?;
+            let (extras, own) = match g.extra_seeds() {
+                (e, _) if e.is_empty() => (Vec::new(), 0..0),
+                (e, own) => (
+                    start_points(g, e, None, stats, &fov, config.fit_fov, windows.is_none())
+                        .map(|(_, _, points)| points)
+                        .unwrap_or_default(),
+                    own,
+                ),
+            };
             let objective = FitObjective::new(
                 g,
                 config.lods[0],
@@ -141,6 +151,7 @@ impl Run {
                     ..MemeticConfig::default()
                 },
             )
+            .and_then(|m| m.with_extra_seeds(&extras, own))
             .map_err(|e| FitError(e.to_string()))?;
             searches.push(Search {
                 generator: g,

@@ -35,10 +35,12 @@ fn symmetric_about_y(mesh: &Mesh) -> bool {
 }
 
 /// The layout, the domain and the seed points of a generator's stage 1: `start` (if any) and
-/// then each of the generator's seeds, × each camera candidate (yaw turns too when `turn`),
-/// with scale and translation solved per view from the mask's bounding box.
+/// then each of `shapes` (the generator's seeds, or its extra seeds), × each camera candidate
+/// (yaw turns too when `turn`), with scale and translation solved per view from the mask's
+/// bounding box.
 pub(super) fn start_points(
     g: &'static dyn Generator,
+    shapes: Vec<Vec<f64>>,
     start: Option<&[f64]>,
     stats: &[MaskStats],
     fov: &[f64],
@@ -54,7 +56,7 @@ pub(super) fn start_points(
     let mut seeds = Vec::new();
     let (mut ls_lo, mut ls_hi) = (f64::INFINITY, f64::NEG_INFINITY);
     // The start first: with more seeds than places, screening keeps seed order on ties.
-    for seed in start.map(<[f64]>::to_vec).into_iter().chain(g.seeds()) {
+    for seed in start.map(<[f64]>::to_vec).into_iter().chain(shapes) {
         let Ok(mesh) = g.generate(&seed, Lod::Low) else {
             continue;
         };

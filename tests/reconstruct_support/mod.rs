@@ -17,7 +17,17 @@ use procfit::reconstruct::{
 /// yet looks like a real dish. `handle` forces the handle on or off.
 pub fn random_dish(rng: &mut Rng, handle: bool) -> Vec<f64> {
     let g = generators::by_name("dish").unwrap();
-    let seeds = g.seeds();
+    // The cups without a saucer (the saucer seeds came later; the cases stay what they were).
+    let has_saucer = g
+        .params()
+        .iter()
+        .position(|s| s.name == "has_saucer")
+        .unwrap();
+    let seeds: Vec<Vec<f64>> = g
+        .seeds()
+        .into_iter()
+        .filter(|s| s[has_saucer] < 0.5)
+        .collect();
     let a = &seeds[rng.below(seeds.len())];
     let b = &seeds[rng.below(seeds.len())];
     let t = rng.range(0.2, 0.8);
@@ -31,8 +41,10 @@ pub fn random_dish(rng: &mut Rng, handle: bool) -> Vec<f64> {
         let s = i as f64 / 8.0;
         *xi = *xi * grow + tilt * (s - 0.5) + bend * (4.0 * s * (1.0 - s) - 0.5);
     }
+    // The saucer's sizes are left alone: they came later, and drawing for them would change
+    // every case after them (a saucer-less dish does not show them anyway).
     for (i, s) in g.params().iter().enumerate().skip(9) {
-        if s.kind.is_continuous() {
+        if s.kind.is_continuous() && !s.name.starts_with("saucer_") {
             x[i] += rng.normal() * 0.02 * (s.max - s.min);
         }
     }
@@ -252,4 +264,51 @@ pub fn measured_mug() -> Mesh {
         triangles: reference.triangles,
         ..Mesh::default()
     }
+}
+
+/// The measured mug standing on a measured saucer (150 mm across, a 16 mm high rim, 4 mm
+/// plate, a 70 mm flat well the mug stands in), lathed in 48 sectors — not the generator's
+/// construction.
+pub fn measured_mug_on_saucer() -> Mesh {
+    use std::f64::consts::TAU;
+    let mm = 0.001f32;
+    let well = 4.0f32;
+    let mut mesh = measured_mug();
+    for p in &mut mesh.positions {
+        p.y += well * mm;
+    }
+    // Closed profile (radius, height): foot ring, underside, rim lip, top, well.
+    let profile = [
+        (0.0, 0.0),
+        (30.0, 0.0),
+        (35.0, 2.0),
+        (72.0, 13.0),
+        (75.0, 15.0),
+        (74.0, 16.0),
+        (70.0, 16.0),
+        (38.0, well),
+        (0.0, well),
+    ];
+    let sectors = 48usize;
+    let base = mesh.positions.len() as u32;
+    for &(r, y) in &profile {
+        for s in 0..sectors {
+            let a = TAU * s as f64 / sectors as f64;
+            mesh.positions.push(Vec3::new(
+                r * a.cos() as f32 * mm,
+                y * mm,
+                -r * a.sin() as f32 * mm,
+            ));
+        }
+    }
+    let n = sectors as u32;
+    for k in 0..profile.len() as u32 - 1 {
+        for s in 0..n {
+            let (a, b) = (base + k * n + s, base + k * n + (s + 1) % n);
+            let (c, d) = (a + n, b + n);
+            mesh.triangles.push([a, b, d]);
+            mesh.triangles.push([a, d, c]);
+        }
+    }
+    mesh
 }
