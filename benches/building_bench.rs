@@ -18,6 +18,9 @@ use procfit::building_bench::{
 };
 use std::path::PathBuf;
 
+/// One fitted row: IoU-64, photo-view IoU, seconds.
+type Row = (f64, f64, f64);
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let quick = args.iter().any(|a| a == "--quick");
@@ -56,7 +59,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     println!("| building | kind | input | IoU-64 | photo-view IoU | seconds |");
     println!("|---|---|---|---|---|---|");
-    let mut sums: Vec<(Input, Vec<(f64, f64, f64)>)> = Vec::new();
+    let mut sums: Vec<(Input, Vec<Row>)> = Vec::new();
     let mut run =
         |name: &str,
          kind: &str,

@@ -687,7 +687,7 @@ fn background(input: Input, view: &View, px: f64, py: f64) -> [f32; 3] {
 }
 
 /// A photo-like image of `mesh` through `view` over the background of `input` (not
-/// [`Input::Mask`]): RGBA8, `view.width × view.height`. Parts in [`COLOURS`], flat-shaded by a
+/// [`Input::Mask`]): RGBA8, `view.width × view.height`. Parts in fixed colours, flat-shaded by a
 /// fixed sun, a fine plaster/tile noise on the surfaces and sensor noise everywhere.
 pub fn photo(mesh: &Mesh, view: &View, input: Input) -> Result<Vec<u8>, FitError> {
     let e = |x: crate::render::RenderError| FitError(x.0);
