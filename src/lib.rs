@@ -10,6 +10,7 @@
 
 pub use procfit_generators as generators;
 
+pub mod building_bench;
 pub mod camera;
 pub mod export;
 pub mod glb;

@@ -1,0 +1,78 @@
+//! The independent building benchmark in CI (issue 15): two of the buildings of
+//! `procfit::building_bench` (written there, not by procfit's generator) fitted at a reduced
+//! budget must keep their IoU-64 above a stated level — from the clean mask and from the photo
+//! on textured ground; and the paper's own test building, when its (unlicensed, never copied)
+//! file is present beside the checkout, from one mask at each of three cameras. Measured
+//! levels are beside each test (`cargo bench --bench building_bench l-hip shed-studio paper`).
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a test binary: a failed step should stop it loudly"
+)]
+
+use procfit::building_bench::{
+    Input, PAPER_CAMERAS, case_view, cases, fit_and_score, input_mask, paper_building,
+};
+use std::path::PathBuf;
+
+/// Quality of the fits here: the default (at the bench's `--quick` 0.4 single-view fits land
+/// in other basins too often to hold a level: l-hip 0.747 there, 0.964 at the default). About
+/// 4 s a fit on 2 threads in release.
+const QUALITY: f64 = 1.0;
+
+fn check(name: &str, input: Input, min: f64) {
+    let case = cases()
+        .unwrap()
+        .into_iter()
+        .find(|c| c.name == name)
+        .unwrap();
+    let mask = input_mask(&case.mesh, &case.view, input).unwrap();
+    let s = fit_and_score(&case.mesh, &case.view, mask, QUALITY).unwrap();
+    eprintln!("{name} ({}): {s:?}", input.name());
+    assert!(
+        s.iou64 >= min,
+        "{name} ({}): IoU-64 {:.3} < {min}",
+        input.name(),
+        s.iou64
+    );
+}
+
+/// Measured 0.964 (0.753 before the generator had L footprints).
+#[test]
+fn l_shaped_house_from_its_mask() {
+    check("l-hip", Input::Mask, 0.90);
+}
+
+/// Measured 0.977 (0.777 before the generator had shed roofs); the photo on textured ground
+/// goes through the automatic segmentation.
+#[test]
+fn shed_roof_on_textured_ground() {
+    check("shed-studio", Input::Textured, 0.90);
+}
+
+/// Measured 0.891 / 0.742 / 0.797 (the issue's target, 0.92 each, is not reached yet: the
+/// fitted building matches the photo, photo-view IoU 0.97–0.98, but not the sides it does not
+/// show); the level guards against a regression below that.
+#[test]
+fn paper_building_from_three_cameras() {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/data/paper/building_test_2_original.obj");
+    let Some(mesh) = paper_building(&path).unwrap() else {
+        eprintln!(
+            "skipped: the paper's building is not at {} (it has no licence and is never in the repository)",
+            path.display()
+        );
+        return;
+    };
+    for (yaw, pitch) in PAPER_CAMERAS {
+        let view = case_view(&mesh, yaw.to_radians(), pitch.to_radians()).unwrap();
+        let mask = input_mask(&mesh, &view, Input::Mask).unwrap();
+        let s = fit_and_score(&mesh, &view, mask, QUALITY).unwrap();
+        eprintln!("paper building at ({yaw}°, {pitch}°): {s:?}");
+        assert!(
+            s.iou64 >= 0.70,
+            "paper building at ({yaw}°, {pitch}°): IoU-64 {:.3}",
+            s.iou64
+        );
+    }
+}
