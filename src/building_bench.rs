@@ -19,7 +19,7 @@
 //! cases at a reduced budget.
 
 use crate::camera::{View, ViewParams};
-use crate::generators::{Lod, Mesh, Part};
+use crate::generators::{Generator, Lod, Mesh, Part};
 use crate::mask::Mask;
 use crate::reconstruct::eval::view_iou;
 use crate::reconstruct::views::{ViewVars, camera_pose};
@@ -776,7 +776,7 @@ pub fn fit_and_score(
     quality: f64,
 ) -> Result<BenchScore, FitError> {
     let config = FitConfig {
-        generator: "building".into(),
+        generator: crate::generators::building::Building.name().into(),
         fov_y: vec![Some(view.params.fov_y)],
         quality,
         ..FitConfig::default()

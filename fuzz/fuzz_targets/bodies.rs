@@ -1,7 +1,7 @@
-// The fuzz targets' bodies, one function a target, shared by the cargo-fuzz targets in this
-// folder (`include!`d) and by the regression test that runs every corpus file and every crash
-// found through them in each `cargo test` (tests/fuzz_corpus.rs). Any panic, abort,
-// out-of-memory or timeout is a bug: hostile input must come back as an error.
+//! The fuzz targets' bodies, one function a target, shared by the cargo-fuzz targets in this
+//! folder (each as its module `bodies`) and by the regression test that runs every corpus file and every crash
+//! found through them in each `cargo test` (tests/fuzz_corpus.rs). Any panic, abort,
+//! out-of-memory or timeout is a bug: hostile input must come back as an error.
 
 use procfit::generators::Lod;
 use procfit::model::Model;

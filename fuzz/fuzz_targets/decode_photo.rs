@@ -1,8 +1,8 @@
 //! cargo-fuzz target `decode_photo`: see `bodies.rs` for what it feeds where, and README.md for how
 //! to run it.
 #![no_main]
-#![allow(dead_code, reason = "bodies.rs holds every target's body; this one runs one")]
 
-include!("bodies.rs");
+#[allow(dead_code, reason = "bodies.rs holds every target's body; this one runs one")]
+mod bodies;
 
-libfuzzer_sys::fuzz_target!(|data: &[u8]| decode_photo(data));
+libfuzzer_sys::fuzz_target!(|data: &[u8]| bodies::decode_photo(data));
