@@ -951,18 +951,20 @@ fn uniform_image_gives_a_flagged_empty_mask() {
     );
 }
 
+/// A cup larger than the frame: it fills the photo and runs off every edge.
+const HUGE: Cup = Cup {
+    cx: 0.62,
+    top: -0.4,
+    bottom: 1.4,
+    r_top: 0.85,
+    r_bottom: 0.8,
+    ..CUP
+};
+
 #[test]
 fn object_filling_the_frame_is_flagged() {
-    let huge = Cup {
-        cx: 0.62,
-        top: -0.4,
-        bottom: 1.4,
-        r_top: 0.85,
-        r_bottom: 0.8,
-        ..CUP
-    };
     let scene = Scene {
-        shapes: vec![Shape::Cup(huge)],
+        shapes: vec![Shape::Cup(HUGE)],
         ..cup_scene(Bg::Plain)
     };
     let (img, _) = render(&scene, 12);
@@ -1233,14 +1235,6 @@ fn labelled_set() -> Vec<Labelled> {
         r_bottom: 0.15 / 0.56,
         ..CUP
     };
-    let huge = Cup {
-        cx: 0.62,
-        top: -0.4,
-        bottom: 1.4,
-        r_top: 0.85,
-        r_bottom: 0.8,
-        ..CUP
-    };
     let mut out = Vec::new();
     for bg in bgs {
         let scene = |shapes: Vec<Shape>, w: u32| Scene {
@@ -1256,7 +1250,7 @@ fn labelled_set() -> Vec<Labelled> {
             ("small", scene(vec![Shape::Cup(small)], 360)),
             ("cut by the frame", scene(vec![Shape::Cup(cut)], 360)),
             ("cropped to its box", scene(vec![Shape::Cup(cropped)], 223)),
-            ("filling the frame", scene(vec![Shape::Cup(huge)], 360)),
+            ("filling the frame", scene(vec![Shape::Cup(HUGE)], 360)),
             ("beside a box", scene(vec![Shape::Cup(CUP), box_], 360)),
         ] {
             out.push(Labelled {
