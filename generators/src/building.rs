@@ -1129,11 +1129,6 @@ impl Model for Building {
     }
 }
 
-/// A preset: the defaults with `changes` (index, value), by name.
-fn preset(name: &'static str, label: &'static str, changes: &[(usize, f64)]) -> Preset {
-    Preset::from_defaults(name, label, &SPEC, changes)
-}
-
 impl Generator for Building {
     fn name(&self) -> &'static str {
         "building"
@@ -1152,7 +1147,7 @@ impl Generator for Building {
         use idx::*;
         let (wall, win, bal) = (0.0, 1.0, 2.0);
         vec![
-            preset(
+            self.preset_from_defaults(
                 "panel_block",
                 "Five-storey panel block",
                 &[
@@ -1175,7 +1170,7 @@ impl Generator for Building {
                     (BALCONY_STRIPE_WIDTH, 3.2),
                 ],
             ),
-            preset(
+            self.preset_from_defaults(
                 "suburban_house",
                 "Two-storey house with a gable roof",
                 &[
@@ -1198,7 +1193,7 @@ impl Generator for Building {
                     (STAIR_STEPS, 3.0),
                 ],
             ),
-            preset(
+            self.preset_from_defaults(
                 "office_block",
                 "Eight-storey office block",
                 &[
@@ -1232,7 +1227,7 @@ impl Generator for Building {
                     (STAIR_STEPS, 2.0),
                 ],
             ),
-            preset(
+            self.preset_from_defaults(
                 "villa",
                 "Villa with a hip roof",
                 &[
@@ -1256,7 +1251,7 @@ impl Generator for Building {
                     (STAIR_STEPS, 5.0),
                 ],
             ),
-            preset(
+            self.preset_from_defaults(
                 "tower",
                 "Ten-storey point tower",
                 &[
@@ -1277,7 +1272,7 @@ impl Generator for Building {
                     (BALCONY_START, 1.0),
                 ],
             ),
-            preset(
+            self.preset_from_defaults(
                 "warehouse",
                 "One-storey warehouse",
                 &[
@@ -1313,7 +1308,7 @@ impl Generator for Building {
                     (STAIRS_DEPTH, 2.0),
                 ],
             ),
-            preset(
+            self.preset_from_defaults(
                 "townhouse_row",
                 "Row of three townhouses",
                 &[
@@ -1338,7 +1333,7 @@ impl Generator for Building {
                     (STAIR_STEPS, 4.0),
                 ],
             ),
-            preset(
+            self.preset_from_defaults(
                 "l_house",
                 "L-shaped house with crossed gable roofs",
                 &[
@@ -1363,7 +1358,7 @@ impl Generator for Building {
                     (WING_WIDTH, 0.35),
                 ],
             ),
-            preset(
+            self.preset_from_defaults(
                 "shed_studio",
                 "Two-storey studio with a shed roof",
                 &[

@@ -432,6 +432,17 @@ pub trait Generator: Send + Sync {
         self.params().iter().map(|p| p.default).collect()
     }
 
+    /// A preset that is this generator's defaults except `changes` (index, value): how a
+    /// generator whose presets differ from its defaults in a few places writes them.
+    fn preset_from_defaults(
+        &self,
+        name: &'static str,
+        label: &'static str,
+        changes: &[(usize, f64)],
+    ) -> Preset {
+        Preset::from_defaults(name, label, self.params(), changes)
+    }
+
     /// The preset with this name.
     fn preset(&self, name: &str) -> Option<Preset> {
         self.presets().into_iter().find(|p| p.name == name)

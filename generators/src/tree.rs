@@ -955,11 +955,6 @@ fn mesh_skeleton(sk: &Skeleton, lod: Lod) -> Mesh {
     mesh
 }
 
-/// A preset: the defaults with `changes` (index, value), by name.
-fn preset(name: &'static str, label: &'static str, changes: &[(usize, f64)]) -> Preset {
-    Preset::from_defaults(name, label, &PARAMS, changes)
-}
-
 /// Level-block parameter index: `lv(level, k)` with `k` 0 branches, 1 length, 2 down angle,
 /// 3 rotate, 4 curve.
 const fn lv(level: usize, k: usize) -> usize {
@@ -982,7 +977,7 @@ impl Generator for TreeGenerator {
     fn presets(&self) -> Vec<Preset> {
         use idx::*;
         vec![
-            preset(
+            self.preset_from_defaults(
                 "oak",
                 "Oak",
                 &[
@@ -1015,7 +1010,7 @@ impl Generator for TreeGenerator {
                     (LEAF_ASPECT, 0.7),
                 ],
             ),
-            preset(
+            self.preset_from_defaults(
                 "pine",
                 "Pine",
                 &[
@@ -1040,7 +1035,7 @@ impl Generator for TreeGenerator {
                     (LEAF_ASPECT, 0.15),
                 ],
             ),
-            preset(
+            self.preset_from_defaults(
                 "birch",
                 "Birch",
                 &[
@@ -1064,7 +1059,7 @@ impl Generator for TreeGenerator {
                     (LEAF_ASPECT, 0.7),
                 ],
             ),
-            preset(
+            self.preset_from_defaults(
                 "willow",
                 "Willow",
                 &[
@@ -1091,7 +1086,7 @@ impl Generator for TreeGenerator {
                     (LEAF_ASPECT, 0.25),
                 ],
             ),
-            preset(
+            self.preset_from_defaults(
                 "poplar",
                 "Poplar",
                 &[
@@ -1116,7 +1111,7 @@ impl Generator for TreeGenerator {
                     (LEAF_ASPECT, 0.9),
                 ],
             ),
-            preset(
+            self.preset_from_defaults(
                 "bush",
                 "Bush",
                 &[
