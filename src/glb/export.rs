@@ -26,13 +26,10 @@ const GLASS_ALPHA: f32 = 0.35;
 /// Alpha cutoff of alpha-masked parts (leaves), the glTF default.
 const MASK_CUTOFF: f32 = 0.5;
 
-/// Writes `model`'s mesh (at the model's level of detail) as a GLB, with its generator state in
+/// Writes `model`'s mesh (at the model's level of detail, its parts in the model's colours) as a GLB, with its generator state in
 /// the scene extras and one camera node per entry of `cameras`.
 pub fn export_model(model: &Model, cameras: &[ExportCamera]) -> Result<Vec<u8>, GlbError> {
-    let mesh = model
-        .generator
-        .generate(&model.params, model.lod)
-        .map_err(|e| GlbError::Export(e.to_string()))?;
+    let mesh = model.mesh().map_err(|e| GlbError::Export(e.to_string()))?;
     write_glb(&mesh, Some(&model.to_doc()), cameras)
 }
 
@@ -503,6 +500,12 @@ fn look(part: &Part) -> Look {
     } else {
         Look::Opaque
     }
+}
+
+/// Whether a part is an ordinary opaque surface (not glass, leaves or translucent): one whose
+/// colour may be lent to or borrowed from a neighbour ([`crate::colors`]).
+pub(crate) fn is_plain(part: &Part) -> bool {
+    look(part) == Look::Opaque
 }
 
 /// A part's linear RGBA base colour as every format writes it: [`Part::color`] clamped to

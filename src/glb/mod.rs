@@ -30,6 +30,7 @@ pub mod export;
 pub mod import;
 
 pub use camera::{CAMERA_FLOATS, ExportCamera};
+pub(crate) use export::is_plain;
 pub use export::{GlbOptions, export_model, write_glb, write_glb_with};
 pub use import::{ImportedGlb, ReferenceMesh, import_glb, import_obj, import_reference};
 
