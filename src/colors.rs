@@ -154,6 +154,65 @@ pub fn estimate(
     Ok(out)
 }
 
+/// The colour of each part of a tree (`mesh`'s parts with triangles) from a photo labelled
+/// branch/leaf ([`crate::tree::labels`]; `labels` and `photo` of one size): leaf parts from the
+/// leaf pixels, bark parts (trunk, branches) from the branch pixels, by the same robust estimate
+/// as [`estimate`]. A tree fit matches the photo's crown and stems only roughly, so its parts
+/// are coloured by the photo's classes rather than by the pixels they cover. A class with fewer
+/// than [`MIN_PIXELS`] pixels leaves its parts at their defaults.
+pub fn from_tree_labels(
+    mesh: &Mesh,
+    labels: &crate::mask::LabelImage,
+    photo: &Rgba<'_>,
+) -> Result<Vec<PartColor>, ColorError> {
+    use crate::tree::{BRANCH, LEAF};
+    let (w, h) = (labels.width(), labels.height());
+    if (photo.width, photo.height) != (w, h) || photo.pixels.len() != 4 * w as usize * h as usize {
+        return Err(ColorError(format!(
+            "the labels are {w}×{h} but the photo is {}×{}",
+            photo.width, photo.height
+        )));
+    }
+    let srgb = srgb_to_linear_table();
+    let class = |want: u8| -> Option<([f32; 3], usize)> {
+        let px: Vec<[f32; 3]> = labels
+            .labels()
+            .iter()
+            .zip(photo.pixels.chunks_exact(4))
+            .filter(|&(&l, _)| l == want)
+            .map(|(_, p)| [0, 1, 2].map(|k| srgb[usize::from(p[k])]))
+            .collect();
+        (px.len() >= MIN_PIXELS).then(|| (robust_color(&px), px.len()))
+    };
+    let (leaf, bark) = (class(LEAF), class(BRANCH));
+    let mut out = Vec::new();
+    for (p, part) in mesh.parts.iter().enumerate() {
+        if !mesh.tri_parts.iter().any(|&t| usize::from(t) == p) {
+            continue;
+        }
+        let measured = if crate::glb::is_foliage(part) {
+            leaf
+        } else if crate::glb::is_bark(part) {
+            bark
+        } else {
+            None
+        };
+        let (color, source) = match measured {
+            Some((c, pixels)) => (c, Source::Photo { pixels }),
+            None => (
+                [part.color[0], part.color[1], part.color[2]],
+                Source::Default,
+            ),
+        };
+        out.push(PartColor {
+            part: part.name,
+            color,
+            source,
+        });
+    }
+    Ok(out)
+}
+
 /// The colours of `estimate` that replace a default (measured or borrowed), for
 /// [`crate::model::Model::colors`].
 pub fn to_part_colors(colors: &[PartColor]) -> PartColors {

@@ -432,19 +432,7 @@ fn photo_colors(
         .generate(&model.params, model.lod)
         .map_err(|e| e.to_string())?;
     let found = colors::estimate(&mesh, &seen.0, &seen.1, &seen.2).map_err(|e| e.to_string())?;
-    let each: Vec<String> = found
-        .iter()
-        .map(|c| {
-            let [r, g, b] = c
-                .color
-                .map(|v| (colors::linear_to_srgb(v) * 255.0).round() as u8);
-            format!("{} #{r:02x}{g:02x}{b:02x}", c.part)
-        })
-        .collect();
-    println!("colours from the photos: {}", each.join(", "));
-    if let Some(note) = colors::unseen_note(&found) {
-        eprintln!("procfit: note: {note}");
-    }
+    print_colors(&found);
     Ok(Some(colors::to_part_colors(&found)))
 }
 
@@ -557,6 +545,50 @@ fn load_tree_labels(
     Ok(labels)
 }
 
+/// A fitted tree's part colours from its photo's leaf and branch pixels, printed; none for a
+/// grey label image (its pixels are labels, not colours).
+fn tree_photo_colors(
+    model: &Model,
+    path: &Path,
+    labels: &procfit::mask::LabelImage,
+) -> Result<procfit::model::PartColors, String> {
+    use procfit::colors;
+    let (_, rgba) = read_image(path)?;
+    if rgba.pixels().all(|p| p[0] == p[1] && p[1] == p[2]) {
+        return Ok(procfit::model::PartColors::new());
+    }
+    let mesh = model
+        .generator
+        .generate(&model.params, model.lod)
+        .map_err(|e| e.to_string())?;
+    let photo = colors::Rgba {
+        width: rgba.width(),
+        height: rgba.height(),
+        pixels: rgba.as_raw(),
+    };
+    let found = colors::from_tree_labels(&mesh, labels, &photo).map_err(|e| e.to_string())?;
+    print_colors(&found);
+    Ok(colors::to_part_colors(&found))
+}
+
+/// Prints the part colours a fit measured (sRGB hex), and a note for the parts not seen.
+fn print_colors(found: &[procfit::colors::PartColor]) {
+    use procfit::colors;
+    let each: Vec<String> = found
+        .iter()
+        .map(|c| {
+            let [r, g, b] = c
+                .color
+                .map(|v| (colors::linear_to_srgb(v) * 255.0).round() as u8);
+            format!("{} #{r:02x}{g:02x}{b:02x}", c.part)
+        })
+        .collect();
+    println!("colours from the photos: {}", each.join(", "));
+    if let Some(note) = colors::unseen_note(found) {
+        eprintln!("procfit: note: {note}");
+    }
+}
+
 /// `procfit reconstruct --generator tree`: the tree GA on one image, progress on stderr, the
 /// GLB with the photo's camera (and params JSON) out.
 fn reconstruct_tree(
@@ -609,6 +641,10 @@ fn reconstruct_tree(
     let mut model = Model::new(generator.name(), &fit.params, lod_of(a, generator)?)
         .map_err(|e| e.to_string())?;
     model.seed = Some(a.seed);
+    if !a.default_colors {
+        let colors = tree_photo_colors(&model, image, &labels)?;
+        model = model.with_colors(&colors).map_err(|e| e.to_string())?;
+    }
     let photo_view = framing.photo_view().map_err(|e| e.to_string())?;
     let name = image.file_name().map(|n| n.to_string_lossy().into_owned());
     let cameras = [reconstruct::export_camera(&photo_view, name)];

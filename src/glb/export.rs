@@ -603,6 +603,16 @@ pub(crate) fn is_plain(part: &Part) -> bool {
     matches!(look(part), Look::Opaque | Look::Bark)
 }
 
+/// Whether a part is leaves (alpha-masked, with the leaf texture).
+pub(crate) fn is_foliage(part: &Part) -> bool {
+    look(part) == Look::Foliage
+}
+
+/// Whether a part is bark (a trunk or branches, with the bark texture).
+pub(crate) fn is_bark(part: &Part) -> bool {
+    look(part) == Look::Bark
+}
+
 /// A part's linear RGBA base colour as every format writes it: [`Part::color`] clamped to
 /// 0–1, and glass given [`GLASS_ALPHA`] where its colour is opaque.
 pub(crate) fn base_color(part: &Part) -> [f32; 4] {

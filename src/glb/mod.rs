@@ -33,8 +33,8 @@ pub mod import;
 pub mod textures;
 
 pub use camera::{CAMERA_FLOATS, ExportCamera};
-pub(crate) use export::is_plain;
 pub use export::{GlbOptions, export_model, write_glb, write_glb_with};
+pub(crate) use export::{is_bark, is_foliage, is_plain};
 pub use import::{ImportedGlb, ReferenceMesh, import_glb, import_obj, import_reference};
 
 use std::fmt;
