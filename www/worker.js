@@ -257,7 +257,7 @@ async function runTreeFit({ fitId, seed = 1, quality = 1, width, height, rgba, c
     if (!w) return [null, []];
     const labels = session.previewLabels();
     return [{ width: w, height: session.previewHeight(), labels: labels.buffer }, [labels.buffer]];
-  });
+  }, () => session.partColors(width, height, labels, new Uint8Array(rgba)));
 }
 
 /** A handler's result whose buffers move to the page instead of being copied. */

@@ -235,7 +235,7 @@ impl FitSession {
     /// parts the photos do not show, or `null`.
     #[wasm_bindgen(js_name = partColors)]
     pub fn part_colors(&self, rgba: &[u8]) -> Result<JsValue, JsError> {
-        use crate::colors::{self, Rgba, Source};
+        use crate::colors::{self, Rgba};
         let r = self.session.result().map_err(js)?;
         let masks = &self.masks;
         let mut photos = Vec::with_capacity(masks.len());
@@ -265,40 +265,7 @@ impl FitSession {
             .generate(&r.model.params, r.model.lod)
             .map_err(js)?;
         let found = colors::estimate(&mesh, &r.views, &photos, masks).map_err(js)?;
-        #[derive(serde::Serialize)]
-        struct PartOut {
-            part: &'static str,
-            color: [f32; 3],
-            source: &'static str,
-            from: Option<&'static str>,
-        }
-        #[derive(serde::Serialize)]
-        struct ColorsOut {
-            colors: crate::model::PartColors,
-            parts: Vec<PartOut>,
-            note: Option<String>,
-        }
-        let out = ColorsOut {
-            colors: colors::to_part_colors(&found),
-            parts: found
-                .iter()
-                .map(|c| {
-                    let (source, from) = match c.source {
-                        Source::Photo { .. } => ("photo", None),
-                        Source::Neighbour(f) => ("neighbour", Some(f)),
-                        Source::Default => ("default", None),
-                    };
-                    PartOut {
-                        part: c.part,
-                        color: c.color,
-                        source,
-                        from,
-                    }
-                })
-                .collect(),
-            note: colors::unseen_note(&found),
-        };
-        super::to_js(&out)
+        super::colors_out(&found)
     }
 
     /// The best model so far (the result once done).

@@ -176,6 +176,48 @@ fn colored_model_of(
     model.with_colors(&colors).map_err(js)
 }
 
+/// Part colours measured in the photos as the page takes them: `{ colors: { part: [r, g, b] },
+/// parts: [{ part, color, source, from }], note }` — `colors` what the model takes (measured or
+/// borrowed), `parts` where each part's colour comes from (`photo`, `neighbour` of `from`, or
+/// `default`), `note` a sentence on the parts the photos do not show, or `null`.
+pub(crate) fn colors_out(found: &[crate::colors::PartColor]) -> Result<JsValue, JsError> {
+    use crate::colors::{self, Source};
+    #[derive(serde::Serialize)]
+    struct PartOut {
+        part: &'static str,
+        color: [f32; 3],
+        source: &'static str,
+        from: Option<&'static str>,
+    }
+    #[derive(serde::Serialize)]
+    struct ColorsOut {
+        colors: crate::model::PartColors,
+        parts: Vec<PartOut>,
+        note: Option<String>,
+    }
+    let out = ColorsOut {
+        colors: colors::to_part_colors(found),
+        parts: found
+            .iter()
+            .map(|c| {
+                let (source, from) = match c.source {
+                    Source::Photo { .. } => ("photo", None),
+                    Source::Neighbour(f) => ("neighbour", Some(f)),
+                    Source::Default => ("default", None),
+                };
+                PartOut {
+                    part: c.part,
+                    color: c.color,
+                    source,
+                    from,
+                }
+            })
+            .collect(),
+        note: colors::unseen_note(found),
+    };
+    to_js(&out)
+}
+
 /// A value for JavaScript with maps as plain objects (the page stores them in IndexedDB and
 /// sends them back as objects).
 pub(crate) fn to_js<T: serde::Serialize>(value: &T) -> Result<JsValue, JsError> {
