@@ -216,6 +216,26 @@ impl Model {
     }
 }
 
+/// The names of `g`'s parts (every level of detail lists them all), found once per generator
+/// by generating its defaults at [`Lod::Low`]: the page checks colours on every slider move.
+fn part_names(g: &dyn Generator) -> Result<Vec<&'static str>, ModelError> {
+    use std::collections::HashMap;
+    use std::sync::{Mutex, OnceLock};
+    static NAMES: OnceLock<Mutex<HashMap<&'static str, Vec<&'static str>>>> = OnceLock::new();
+    let cache = NAMES.get_or_init(|| Mutex::new(HashMap::new()));
+    if let Some(names) = cache.lock().ok().and_then(|c| c.get(g.name()).cloned()) {
+        return Ok(names);
+    }
+    let mesh = g
+        .generate(&g.defaults(), Lod::Low)
+        .map_err(|e| ModelError(e.to_string()))?;
+    let names: Vec<&'static str> = mesh.parts.iter().map(|p| p.name).collect();
+    if let Ok(mut c) = cache.lock() {
+        c.insert(g.name(), names.clone());
+    }
+    Ok(names)
+}
+
 /// `colors` checked against `g`'s parts: an unknown part name or a non-finite channel is an
 /// error (it would silently change nothing, or make an invalid file); channels are clamped to
 /// 0–1. The part names are the generator's mesh parts (every level of detail lists them all).
@@ -223,13 +243,10 @@ fn checked_colors(g: &dyn Generator, colors: &PartColors) -> Result<PartColors, 
     if colors.is_empty() {
         return Ok(PartColors::new());
     }
-    let mesh = g
-        .generate(&g.defaults(), Lod::Low)
-        .map_err(|e| ModelError(e.to_string()))?;
+    let names = part_names(g)?;
     let mut out = PartColors::new();
     for (name, c) in colors {
-        if !mesh.parts.iter().any(|p| p.name == name) {
-            let names: Vec<&str> = mesh.parts.iter().map(|p| p.name).collect();
+        if !names.iter().any(|p| p == name) {
             return Err(ModelError(format!(
                 "{} has no part `{name}` to colour (parts: {})",
                 g.name(),
