@@ -14,7 +14,8 @@
 //! `-- --save DIR` also writes each case's photos and masks there as PNG.
 
 use procfit::building_bench::{
-    BenchScore, Input, PAPER_CAMERAS, case_view, cases, fit_and_score, input_mask, paper_building,
+    BenchScore, Input, PAPER_CAMERAS, case_view, cases, fit_and_score, fit_and_score_input,
+    input_mask, paper_building,
 };
 use std::path::PathBuf;
 
@@ -57,8 +58,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "## Independent building benchmark, 2 threads, quality {quality}{}\n",
         if quick { " (--quick)" } else { "" }
     );
-    println!("| building | kind | input | IoU-64 | photo-view IoU | seconds |");
-    println!("|---|---|---|---|---|---|");
+    println!("| building | kind | input | IoU-64 | photo-view IoU | seconds | ΔE wall / roof |");
+    println!("|---|---|---|---|---|---|---|");
     let mut sums: Vec<(Input, Vec<Row>)> = Vec::new();
     let mut run =
         |name: &str,
@@ -69,8 +70,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             match pool.install(f) {
                 Ok(s) => {
                     let secs = t.elapsed().as_secs_f64();
+                    // The photo's part colours against the colours it was drawn with.
+                    let de = |d: Option<f64>| d.map_or("–".to_string(), |d| format!("{d:.1}"));
+                    let colours = s
+                        .colour_de
+                        .map_or(String::new(), |(w, r)| format!("{} / {}", de(w), de(r)));
                     println!(
-                        "| {name} | {kind} | {} | {:.3} | {:.3} | {secs:.1} |",
+                        "| {name} | {kind} | {} | {:.3} | {:.3} | {secs:.1} | {colours} |",
                         input.name(),
                         s.iou64,
                         s.photo_iou
@@ -93,8 +99,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         for &input in &inputs {
             run(case.name, case.kind, input, &|| {
-                let mask = input_mask(&case.mesh, &case.view, input)?;
-                fit_and_score(&case.mesh, &case.view, mask, quality)
+                fit_and_score_input(&case.mesh, &case.view, input, quality)
             });
         }
     }

@@ -13,7 +13,9 @@
 //! Scoring follows the dish and building recovery tests: the fit is moved into the truth's frame
 //! through view 0 ([`align_to_reference`], the truth's object transform is known) and compared
 //! over the 64 turntable views ([`iou64`], 128²); the photo-view IoU is the fit through its own
-//! fitted camera against the true mask. The paper's own test building is read from a path given
+//! fitted camera against the true mask. From a photo, the fitted model's wall and roof colours
+//! measured in it ([`crate::colors`], issue 17) are compared with the colours it was drawn with
+//! (CIE76 ΔE, [`BenchScore::colour_de`]). The paper's own test building is read from a path given
 //! at run time (it has no licence and never enters the repository).
 //! `cargo bench --bench building_bench` prints the table; `tests/building_bench.rs` runs two
 //! cases at a reduced budget.
@@ -765,6 +767,10 @@ pub struct BenchScore {
     pub iou64: f64,
     /// The fit through its own fitted camera against the true mask.
     pub photo_iou: f64,
+    /// For a photo: CIE76 ΔE*ab of the fitted model's wall and roof colours measured in the
+    /// photo ([`crate::colors::estimate`]) against the colours the photo was drawn with
+    /// (`None` where the fitted model has no such part in view).
+    pub colour_de: Option<(Option<f64>, Option<f64>)>,
 }
 
 /// Fits `mask` as the CLI does with the building generator (the field of view known), `quality`
@@ -775,6 +781,33 @@ pub fn fit_and_score(
     mask: Mask,
     quality: f64,
 ) -> Result<BenchScore, FitError> {
+    fit_scored(truth, view, mask, quality, None)
+}
+
+/// [`fit_and_score`] from `input` made of `truth` through `view` ([`input_mask`]), and for a
+/// photo also the part colours measured in it ([`BenchScore::colour_de`]).
+pub fn fit_and_score_input(
+    truth: &Mesh,
+    view: &View,
+    input: Input,
+    quality: f64,
+) -> Result<BenchScore, FitError> {
+    if input == Input::Mask {
+        return fit_and_score(truth, view, true_mask(truth, view)?, quality);
+    }
+    let px = photo(truth, view, input)?;
+    let mask = segmented(view, &px)?;
+    fit_scored(truth, view, mask, quality, Some(&px))
+}
+
+fn fit_scored(
+    truth: &Mesh,
+    view: &View,
+    mask: Mask,
+    quality: f64,
+    photo: Option<&[u8]>,
+) -> Result<BenchScore, FitError> {
+    let for_colours = mask.clone();
     let config = FitConfig {
         generator: crate::generators::building::Building.name().into(),
         fov_y: vec![Some(view.params.fov_y)],
@@ -797,9 +830,30 @@ pub fn fit_and_score(
         128,
     )?;
     let photo_iou = view_iou(&mesh, fitted, &true_mask(truth, view)?)?;
+    let colour_de = match photo {
+        None => None,
+        Some(px) => {
+            let rgba = crate::colors::Rgba {
+                width: view.width,
+                height: view.height,
+                pixels: px,
+            };
+            let found = crate::colors::estimate(&mesh, &[*fitted], &[rgba], &[for_colours])
+                .map_err(|e| FitError(e.0))?;
+            let de = |part: &str, truth: u8| {
+                let want = COLOURS[usize::from(truth)].map(crate::colors::srgb_to_linear);
+                found
+                    .iter()
+                    .find(|c| c.part == part && c.source != crate::colors::Source::Default)
+                    .map(|c| crate::colors::delta_e76(c.color, want))
+            };
+            Some((de("wall", WALL), de("roof", ROOF)))
+        }
+    };
     Ok(BenchScore {
         iou64: iou,
         photo_iou,
+        colour_de,
     })
 }
 

@@ -5,13 +5,14 @@
 //! [`segment`] turns a photo into a mask; [`reconstruct`] fits a generator from
 //! `procfit_generators` to the masks by rendering silhouettes with [`render`] through a
 //! [`camera`], scoring them with [`loss`] and stepping the parameters with [`optim`] (trees use
-//! [`tree`]); [`glb`] writes the result. [`model`] is the params JSON shared by the CLI, the
+//! [`tree`]); [`colors`] gives its parts the photos' colours; [`glb`] writes the result. [`model`] is the params JSON shared by the CLI, the
 //! page and the GLB extras. Only `web` (compiled for wasm32 alone) talks to JavaScript.
 
 pub use procfit_generators as generators;
 
 pub mod building_bench;
 pub mod camera;
+pub mod colors;
 pub mod export;
 pub mod glb;
 pub mod loss;

@@ -5,14 +5,23 @@
 //! { "generator": "dish", "version": 1, "params": { "height_scale": 0.8, ... }, "lod": 1, "seed": 7 }
 //! ```
 //!
+//! `colors`, when present, holds per-part base colours (linear RGB in 0–1, by part name)
+//! estimated from the photos ([`crate::colors`]); they replace the generator's default part
+//! colours in every export and survive editing, refitting and reopening.
+//!
 //! Reading is strict where a mistake would silently change the model (unknown generator, a name
 //! the generator does not have, a value that is not a finite number, a newer version) and lenient
 //! where it cannot (a missing parameter takes its default; values out of range are clamped by the
 //! generator).
 
-use crate::generators::{self, Generator, Lod, sanitize_params};
+use crate::generators::{self, Generator, Lod, Mesh, sanitize_params};
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::fmt;
+
+/// Per-part base colours by part name: linear RGB, each channel in 0–1 (glTF's
+/// `baseColorFactor` without alpha). A part not named keeps its generator default.
+pub type PartColors = BTreeMap<String, [f32; 3]>;
 
 /// A generator's state as stored in params JSON and GLB extras.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -29,6 +38,9 @@ pub struct ParamsDoc {
     /// Random seed of the fit, when known.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub seed: Option<u64>,
+    /// Per-part base colours from the photos, when the model has them.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub colors: PartColors,
 }
 
 /// A params document that cannot be used.
@@ -54,6 +66,8 @@ pub struct Model {
     pub lod: Lod,
     /// Seed of the fit, when the model comes from one.
     pub seed: Option<u64>,
+    /// Per-part base colours (from the photos); empty: the generator's defaults.
+    pub colors: PartColors,
 }
 
 impl fmt::Debug for Model {
@@ -63,6 +77,7 @@ impl fmt::Debug for Model {
             .field("params", &self.params)
             .field("lod", &self.lod)
             .field("seed", &self.seed)
+            .field("colors", &self.colors)
             .finish()
     }
 }
@@ -78,6 +93,7 @@ impl Model {
             params,
             lod,
             seed: None,
+            colors: PartColors::new(),
         })
     }
 
@@ -96,6 +112,7 @@ impl Model {
             params,
             lod: Some(self.lod as u8),
             seed: self.seed,
+            colors: self.colors.clone(),
         }
     }
 
@@ -137,12 +154,38 @@ impl Model {
             Some(i) => Lod::from_index(usize::from(i))
                 .ok_or_else(|| ModelError(format!("lod {i} is not in 0..=3")))?,
         };
+        let colors = checked_colors(g, &doc.colors)?;
         Ok(Model {
             generator: g,
             params,
             lod,
             seed: doc.seed,
+            colors,
         })
+    }
+
+    /// This model with `colors` as its part colours (checked like a document's: every name a
+    /// part of the generator, every channel a finite number, clamped to 0–1).
+    pub fn with_colors(self, colors: &PartColors) -> Result<Model, ModelError> {
+        let colors = checked_colors(self.generator, colors)?;
+        Ok(Model { colors, ..self })
+    }
+
+    /// Generates the model's mesh at its level of detail, its parts coloured by
+    /// [`Model::colors`]: the mesh every export writes.
+    pub fn mesh(&self) -> Result<Mesh, generators::GenError> {
+        let mut mesh = self.generator.generate(&self.params, self.lod)?;
+        self.paint(&mut mesh);
+        Ok(mesh)
+    }
+
+    /// Sets the base colour (not the alpha) of each part of `mesh` that [`Model::colors`] names.
+    pub fn paint(&self, mesh: &mut Mesh) {
+        for part in &mut mesh.parts {
+            if let Some(c) = self.colors.get(part.name) {
+                part.color[..3].copy_from_slice(c);
+            }
+        }
     }
 
     /// Parses params JSON.
@@ -171,6 +214,51 @@ impl Model {
         // Serialising a struct of strings, numbers and maps cannot fail.
         serde_json::to_string_pretty(&self.to_doc()).unwrap_or_default()
     }
+}
+
+/// The names of `g`'s parts (every level of detail lists them all), found once per generator
+/// by generating its defaults at [`Lod::Low`]: the page checks colours on every slider move.
+fn part_names(g: &dyn Generator) -> Result<Vec<&'static str>, ModelError> {
+    use std::collections::HashMap;
+    use std::sync::{Mutex, OnceLock};
+    static NAMES: OnceLock<Mutex<HashMap<&'static str, Vec<&'static str>>>> = OnceLock::new();
+    let cache = NAMES.get_or_init(|| Mutex::new(HashMap::new()));
+    if let Some(names) = cache.lock().ok().and_then(|c| c.get(g.name()).cloned()) {
+        return Ok(names);
+    }
+    let mesh = g
+        .generate(&g.defaults(), Lod::Low)
+        .map_err(|e| ModelError(e.to_string()))?;
+    let names: Vec<&'static str> = mesh.parts.iter().map(|p| p.name).collect();
+    if let Ok(mut c) = cache.lock() {
+        c.insert(g.name(), names.clone());
+    }
+    Ok(names)
+}
+
+/// `colors` checked against `g`'s parts: an unknown part name or a non-finite channel is an
+/// error (it would silently change nothing, or make an invalid file); channels are clamped to
+/// 0–1. The part names are the generator's mesh parts (every level of detail lists them all).
+fn checked_colors(g: &dyn Generator, colors: &PartColors) -> Result<PartColors, ModelError> {
+    if colors.is_empty() {
+        return Ok(PartColors::new());
+    }
+    let names = part_names(g)?;
+    let mut out = PartColors::new();
+    for (name, c) in colors {
+        if !names.iter().any(|p| p == name) {
+            return Err(ModelError(format!(
+                "{} has no part `{name}` to colour (parts: {})",
+                g.name(),
+                names.join(", ")
+            )));
+        }
+        if c.iter().any(|v| !v.is_finite()) {
+            return Err(ModelError(format!("the colour of `{name}` is not finite")));
+        }
+        out.insert(name.clone(), c.map(|v| v.clamp(0.0, 1.0)));
+    }
+    Ok(out)
 }
 
 #[cfg(test)]

@@ -74,6 +74,10 @@ pub struct ReconstructArgs {
     /// a tree keeps its seed and never ends less like the photo than the start.
     #[arg(long)]
     start: Option<PathBuf>,
+    /// Keep the generator's default part colours instead of the colours measured in the
+    /// photos (a refit keeps `--start`'s colours).
+    #[arg(long)]
+    default_colors: bool,
 }
 
 /// The model `--start` names: a params JSON or a procfit GLB.
@@ -149,11 +153,13 @@ fn read_image(path: &Path) -> Result<(Vec<u8>, image::RgbaImage), String> {
 }
 
 /// One view as loaded: its mask at the working size, the file's own size in pixels (upright),
-/// and for a photo with EXIF its field of view.
+/// for a photo with EXIF its field of view, and for a photo (or a cut-out with transparency)
+/// its sRGB RGBA pixels at the mask's size, for the part colours.
 struct LoadedView {
     mask: Mask,
     file_size: (u32, u32),
     fov: Option<f64>,
+    rgba: Option<Vec<u8>>,
 }
 
 /// A view's mask. The file is decoded once, straight to the working size (a large JPEG by a
@@ -172,6 +178,7 @@ fn load_view(path: &Path) -> Result<LoadedView, String> {
         Mask::new(w, h, v.iter().map(|&c| f32::from(c) / 255.0).collect()).map_err(|e| at(&e))
     };
     let mut auto = false;
+    let mut rgba = Some(px.to_vec());
     let mask = if photo.has_alpha() && px.chunks_exact(4).any(|p| p[3] < 128) {
         coverage(&px.chunks_exact(4).map(|p| p[3]).collect::<Vec<_>>())?
     } else if px.chunks_exact(4).all(|p| p[0] == p[1] && p[1] == p[2])
@@ -181,6 +188,8 @@ fn load_view(path: &Path) -> Result<LoadedView, String> {
             .count()
             >= px.len() / 4 * 95 / 100
     {
+        // A grey mask image: no colours to take.
+        rgba = None;
         coverage(&px.chunks_exact(4).map(|p| p[0]).collect::<Vec<_>>())?
     } else {
         auto = true;
@@ -208,6 +217,7 @@ fn load_view(path: &Path) -> Result<LoadedView, String> {
         mask,
         file_size,
         fov,
+        rgba,
     })
 }
 
@@ -240,8 +250,13 @@ fn load_views(paths: &[PathBuf]) -> Result<Vec<LoadedView>, String> {
         .min()
         .unwrap_or((0, 0));
     for v in &mut views {
-        if (v.mask.width(), v.mask.height()) != (tw, th) {
+        let (w, h) = (v.mask.width(), v.mask.height());
+        if (w, h) != (tw, th) {
             v.mask = resample_mask(&v.mask, tw, th);
+            v.rgba = v
+                .rgba
+                .take()
+                .map(|px| segment::decode::area_resample(&px, w, h, 4, tw, th).0);
         }
     }
     Ok(views)
@@ -309,6 +324,7 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
         }
         None => a.generator.clone(),
     };
+    let start_colors = start.as_ref().map(|m| m.colors.clone()).unwrap_or_default();
     let start = start.map(|m| m.params);
     // How the generator is fitted is its own declaration, not a name check here.
     if let Some(g) = generators::by_name(&generator)
@@ -322,7 +338,8 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
     let views = load_views(&a.images)?;
     // --fov wins, then the photo's EXIF focal length, then the default.
     let fov_y = views.iter().map(|v| a.fov.or(v.fov)).collect();
-    let masks = views.into_iter().map(|v| v.mask).collect::<Vec<_>>();
+    let (masks, pixels): (Vec<Mask>, Vec<Option<Vec<u8>>>) =
+        views.into_iter().map(|v| (v.mask, v.rgba)).unzip();
     let config = FitConfig {
         generator,
         start,
@@ -352,10 +369,17 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
         }
     });
     let result = session.result().map_err(|e| e.to_string())?;
+    let colors = if a.default_colors {
+        procfit::model::PartColors::new()
+    } else {
+        photo_colors(&result.model, &result.views, &pixels, &masks)?.unwrap_or(start_colors)
+    };
     let model = Model {
         lod: lod_of(a, result.model.generator)?,
         ..result.model.clone()
-    };
+    }
+    .with_colors(&colors)
+    .map_err(|e| e.to_string())?;
     let cameras: Vec<ExportCamera> = result
         .views
         .iter()
@@ -377,6 +401,39 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
         model.lod.index()
     );
     report_photo_match(&result.model, &result.views, &masks, &a.images)
+}
+
+/// The part colours measured in the photos (the views that have one; `None` when none has),
+/// printed, with a note on stderr for the parts the photos do not show.
+fn photo_colors(
+    model: &Model,
+    views: &[procfit::camera::View],
+    pixels: &[Option<Vec<u8>>],
+    masks: &[Mask],
+) -> Result<Option<procfit::model::PartColors>, String> {
+    use procfit::colors;
+    let mut seen = (Vec::new(), Vec::new(), Vec::new());
+    for ((view, px), mask) in views.iter().zip(pixels).zip(masks) {
+        if let Some(px) = px {
+            seen.0.push(*view);
+            seen.1.push(colors::Rgba {
+                width: view.width,
+                height: view.height,
+                pixels: px,
+            });
+            seen.2.push(mask.clone());
+        }
+    }
+    if seen.0.is_empty() {
+        return Ok(None);
+    }
+    let mesh = model
+        .generator
+        .generate(&model.params, model.lod)
+        .map_err(|e| e.to_string())?;
+    let found = colors::estimate(&mesh, &seen.0, &seen.1, &seen.2).map_err(|e| e.to_string())?;
+    print_colors(&found);
+    Ok(Some(colors::to_part_colors(&found)))
 }
 
 /// The level of detail a fit is written at: [`Lod::High`], or the generator's
@@ -488,6 +545,50 @@ fn load_tree_labels(
     Ok(labels)
 }
 
+/// A fitted tree's part colours from its photo's leaf and branch pixels, printed; none for a
+/// grey label image (its pixels are labels, not colours).
+fn tree_photo_colors(
+    model: &Model,
+    path: &Path,
+    labels: &procfit::mask::LabelImage,
+) -> Result<procfit::model::PartColors, String> {
+    use procfit::colors;
+    let (_, rgba) = read_image(path)?;
+    if rgba.pixels().all(|p| p[0] == p[1] && p[1] == p[2]) {
+        return Ok(procfit::model::PartColors::new());
+    }
+    let mesh = model
+        .generator
+        .generate(&model.params, model.lod)
+        .map_err(|e| e.to_string())?;
+    let photo = colors::Rgba {
+        width: rgba.width(),
+        height: rgba.height(),
+        pixels: rgba.as_raw(),
+    };
+    let found = colors::from_tree_labels(&mesh, labels, &photo).map_err(|e| e.to_string())?;
+    print_colors(&found);
+    Ok(colors::to_part_colors(&found))
+}
+
+/// Prints the part colours a fit measured (sRGB hex), and a note for the parts not seen.
+fn print_colors(found: &[procfit::colors::PartColor]) {
+    use procfit::colors;
+    let each: Vec<String> = found
+        .iter()
+        .map(|c| {
+            let [r, g, b] = c
+                .color
+                .map(|v| (colors::linear_to_srgb(v) * 255.0).round() as u8);
+            format!("{} #{r:02x}{g:02x}{b:02x}", c.part)
+        })
+        .collect();
+    println!("colours from the photos: {}", each.join(", "));
+    if let Some(note) = colors::unseen_note(found) {
+        eprintln!("procfit: note: {note}");
+    }
+}
+
 /// `procfit reconstruct --generator tree`: the tree GA on one image, progress on stderr, the
 /// GLB with the photo's camera (and params JSON) out.
 fn reconstruct_tree(
@@ -540,6 +641,10 @@ fn reconstruct_tree(
     let mut model = Model::new(generator.name(), &fit.params, lod_of(a, generator)?)
         .map_err(|e| e.to_string())?;
     model.seed = Some(a.seed);
+    if !a.default_colors {
+        let colors = tree_photo_colors(&model, image, &labels)?;
+        model = model.with_colors(&colors).map_err(|e| e.to_string())?;
+    }
     let photo_view = framing.photo_view().map_err(|e| e.to_string())?;
     let name = image.file_name().map(|n| n.to_string_lossy().into_owned());
     let cameras = [reconstruct::export_camera(&photo_view, name)];

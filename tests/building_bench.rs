@@ -11,7 +11,8 @@
 )]
 
 use procfit::building_bench::{
-    Input, PAPER_CAMERAS, case_view, cases, fit_and_score, input_mask, paper_building,
+    BenchScore, Input, PAPER_CAMERAS, case_view, cases, fit_and_score, fit_and_score_input,
+    input_mask, paper_building,
 };
 use std::path::PathBuf;
 
@@ -20,14 +21,13 @@ use std::path::PathBuf;
 /// 4 s a fit on 2 threads in release.
 const QUALITY: f64 = 1.0;
 
-fn check(name: &str, input: Input, min: f64) {
+fn check(name: &str, input: Input, min: f64) -> BenchScore {
     let case = cases()
         .unwrap()
         .into_iter()
         .find(|c| c.name == name)
         .unwrap();
-    let mask = input_mask(&case.mesh, &case.view, input).unwrap();
-    let s = fit_and_score(&case.mesh, &case.view, mask, QUALITY).unwrap();
+    let s = fit_and_score_input(&case.mesh, &case.view, input, QUALITY).unwrap();
     eprintln!("{name} ({}): {s:?}", input.name());
     assert!(
         s.iou64 >= min,
@@ -35,6 +35,7 @@ fn check(name: &str, input: Input, min: f64) {
         input.name(),
         s.iou64
     );
+    s
 }
 
 /// Measured 0.964 (0.753 before the generator had L footprints).
@@ -44,10 +45,15 @@ fn l_shaped_house_from_its_mask() {
 }
 
 /// Measured 0.977 (0.777 before the generator had shed roofs); the photo on textured ground
-/// goes through the automatic segmentation.
+/// goes through the automatic segmentation. The roof's colour measured in the photo (issue 17)
+/// is the colour it was drawn with, ΔE 0.7 (CIE76); the walls come out ΔE 21 darker: the
+/// photo's sun is high, so no wall is seen fully lit, and one photo cannot tell a dark wall
+/// from a wall in the shade.
 #[test]
 fn shed_roof_on_textured_ground() {
-    check("shed-studio", Input::Textured, 0.90);
+    let s = check("shed-studio", Input::Textured, 0.90);
+    let roof = s.colour_de.and_then(|(_, roof)| roof);
+    assert!(roof.is_some_and(|d| d <= 6.0), "roof colour ΔE {roof:?}");
 }
 
 /// Measured 0.891 / 0.742 / 0.797 (the issue's target, 0.92 each, is not reached yet: the

@@ -918,3 +918,45 @@ fn compact_glbs_open_again_as_the_same_model() {
         );
     }
 }
+
+/// A tree's leaf cards carry the leaf texture, alpha-masked, and its trunk and branches the
+/// bark texture: two PNG images embedded once each, whatever the level of detail; a dish has
+/// none (issue 17).
+#[test]
+fn trees_have_leaf_and_bark_textures_written_once() {
+    let tree = generators::by_name("tree").unwrap();
+    for lod in Lod::ALL {
+        let model = Model::new("tree", &tree.presets()[0].values, lod).unwrap();
+        let glb = procfit::glb::export_model(&model, &[]).unwrap();
+        let gltf = gltf::Gltf::from_slice(&glb).unwrap();
+        assert_eq!(gltf.images().count(), 2, "lod {}", lod.index());
+        let bin = gltf.blob.as_deref().unwrap();
+        for image in gltf.images() {
+            let gltf::image::Source::View { view, mime_type } = image.source() else {
+                panic!("image not embedded")
+            };
+            assert_eq!(mime_type, "image/png");
+            let png = &bin[view.offset()..view.offset() + view.length()];
+            image::load_from_memory(png).unwrap();
+        }
+        for m in gltf.materials() {
+            let texture = m
+                .pbr_metallic_roughness()
+                .base_color_texture()
+                .map(|t| t.texture().source().name().unwrap_or("").to_string());
+            match m.name().unwrap() {
+                "leaf" => {
+                    assert_eq!(texture.as_deref(), Some("leaves"));
+                    assert_eq!(m.alpha_mode(), gltf::material::AlphaMode::Mask);
+                    assert!(m.double_sided());
+                }
+                "trunk" | "branch" => assert_eq!(texture.as_deref(), Some("bark")),
+                other => panic!("unexpected tree part {other}"),
+            }
+        }
+    }
+    let dish = generators::by_name("dish").unwrap();
+    let model = Model::new("dish", &dish.presets()[0].values, Lod::Medium).unwrap();
+    let glb = procfit::glb::export_model(&model, &[]).unwrap();
+    assert_eq!(gltf::Gltf::from_slice(&glb).unwrap().images().count(), 0);
+}

@@ -71,6 +71,27 @@ fn write_all(dir: &Path) -> usize {
             put(name, glb);
         }
     }
+    // A mug in colours from a photo (baseColorFactor from `Model::colors`), plain and compact.
+    let mug = generators::by_name("dish").unwrap().presets()[0]
+        .values
+        .clone();
+    let mut colors = procfit::model::PartColors::new();
+    colors.insert("body".into(), [0.06, 0.22, 0.62]);
+    colors.insert("handle".into(), [0.86, 0.86, 0.84]);
+    let model = Model::new("dish", &mug, Lod::Medium)
+        .unwrap()
+        .with_colors(&colors)
+        .unwrap();
+    put(
+        "dish-coloured".into(),
+        export_model(&model, &cameras).unwrap(),
+    );
+    let mesh = model.mesh().unwrap();
+    let compact = GlbOptions { quantize: true };
+    put(
+        "dish-coloured.compact".into(),
+        write_glb_with(&mesh, Some(&model.to_doc()), &cameras, compact).unwrap(),
+    );
     // One part of 70 000 vertices: u32 indices.
     put(
         "strip-70000".into(),

@@ -1,7 +1,7 @@
 // Loads every .glb in a directory with three.js's GLTFLoader (in node: parsing needs no WebGL)
 // and checks that it finds what the file declares: every named mesh node as a three.js Mesh of
-// that name, every camera node as a PerspectiveCamera, and the generator state (scene extras) as
-// the scene's userData.
+// that name, every camera node as a PerspectiveCamera, every base colour texture on its material
+// (embedded PNGs), and the generator state (scene extras) as the scene's userData.
 //
 // A file `X.compact.glb` (quantised) beside `X.glb` must load to the same world-space bounding
 // box of every part, within the quantisation step (1/32767 of the part's size) plus 1e-6.
@@ -31,6 +31,19 @@ function gltfJson(bytes) {
   const length = view.getUint32(12, true);
   return JSON.parse(new TextDecoder().decode(bytes.subarray(20, 20 + length)));
 }
+
+// Node has no DOM: GLTFLoader reaches a GLB's embedded images through `self.URL` (a blob: URL)
+// and `createImageBitmap`. This one checks the bytes are a PNG and reports its size, so a
+// textured material gets its texture (the browser tests decode the pixels for real).
+globalThis.self ??= globalThis;
+let images = 0;
+globalThis.createImageBitmap ??= async (blob) => {
+  const b = new Uint8Array(await blob.arrayBuffer());
+  if (![0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a].every((v, i) => b[i] === v)) throw new Error('an embedded image is not a PNG');
+  const view = new DataView(b.buffer, b.byteOffset, b.byteLength);
+  images += 1;
+  return { width: view.getUint32(16), height: view.getUint32(20), close() {} };
+};
 
 const loader = new GLTFLoader();
 /** World-space bounding box of each named mesh, by file. */
@@ -69,6 +82,12 @@ for (const file of files) {
     if (gltf.cameras.length !== (json.cameras ?? []).length) {
       problems.push(`${gltf.cameras.length} cameras loaded, ${(json.cameras ?? []).length} declared`);
     }
+    // A material with a base colour texture in the file has it in three.js.
+    gltf.scene.traverse((o) => {
+      if (o.type !== 'Mesh') return;
+      const declared = (json.materials ?? []).find((m) => m.name === o.material?.name);
+      if (declared?.pbrMetallicRoughness?.baseColorTexture && !o.material.map) problems.push(`part "${o.name}" lost its texture`);
+    });
     const extras = json.scenes?.[json.scene ?? 0]?.extras;
     if (extras && gltf.scene.userData.generator !== extras.generator) {
       problems.push('generator state missing from the scene userData');
@@ -99,6 +118,7 @@ for (const file of files.filter((f) => f.endsWith('.compact.glb'))) {
     }
   }
 }
+console.log(`three.js GLTFLoader: ${images} embedded PNG images decoded`);
 console.log(`three.js GLTFLoader: ${compared} compact files placed like their plain ones`);
 console.log(`three.js GLTFLoader: ${files.length} files, ${parts} parts, ${cameras} cameras, ${failed} failed`);
 process.exit(failed > 0 ? 1 : 0);

@@ -71,6 +71,13 @@ fn photo_to_glb_with_its_camera() {
     let doc = procfit::model::Model::from_json(&std::fs::read_to_string(&params).expect("json"))
         .expect("params");
     assert_eq!(doc.generator.name(), "tree");
+    // The leaves and the bark take the photo's leaf and branch colours (issue 17).
+    let srgb = |c: [u8; 3]| c.map(|v| procfit::colors::srgb_to_linear(f32::from(v) / 255.0));
+    for (part, want) in [("leaf", [40, 120, 30]), ("trunk", [90, 60, 35])] {
+        let got = doc.colors.get(part).copied().unwrap_or_default();
+        let de = procfit::colors::delta_e76(got, srgb(want));
+        assert!(de < 1.0, "{part}: {got:?} vs {want:?}, ΔE {de:.2}");
+    }
     let model = procfit::glb::import_glb(&std::fs::read(&glb).expect("glb")).expect("imports");
     assert_eq!(model.cameras.len(), 1);
     let cam = &model.cameras[0];

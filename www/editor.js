@@ -44,18 +44,34 @@ export class Editor extends EventTarget {
     this.latencies = [];
     this.timings = [];
     this.cameras = [];
+    /** @type {Record<string, number[]> | null} part colours from the photos (linear RGB) */
+    this.colors = null;
+    /** Whether the model shows `colors` (the "Colours from the photo" toggle) or the defaults. */
+    this.useColors = true;
   }
 
-  /** The state worth saving: generator, params, lod. */
+  /**
+   * The state worth saving: generator, params, lod, cameras, the photos' part colours and
+   * whether they are used. The worker writes `colors` into the model only when `useColors`.
+   */
   get state() {
-    return this.spec ? { generator: this.spec.name, params: this.params.slice(), lod: this.lod, cameras: this.cameras.slice() } : null;
+    return this.spec
+      ? { generator: this.spec.name, params: this.params.slice(), lod: this.lod, cameras: this.cameras.slice(), colors: this.colors, useColors: this.useColors }
+      : null;
+  }
+
+  /** Shows the photos' part colours (true) or the generator's defaults (false). */
+  setUseColors(on) {
+    this.useColors = on;
+    this.schedule();
+    this.emitChange();
   }
 
   /**
    * Shows `generator` with `params` (default: its defaults) as the new base ("reset" returns
    * here); clears the history. Throws for an unknown generator.
    */
-  open(generator, params = null, lod = this.lod, cameras = []) {
+  open(generator, params = null, lod = this.lod, cameras = [], colors = null) {
     const spec = this.specs.get(generator);
     if (!spec) throw new Error(`this build has no generator called “${generator}”`);
     const changedGenerator = this.spec?.name !== generator;
@@ -65,6 +81,9 @@ export class Editor extends EventTarget {
     this.lod = lod;
     // The photos' cameras from a fit go into every GLB of this model.
     this.cameras = cameras.slice();
+    // Part colours belong to the model they were measured on: a new model keeps none.
+    this.colors = colors && Object.keys(colors).length ? colors : null;
+    this.useColors = true;
     this.undoStack = [];
     this.redoStack = [];
     if (changedGenerator) this.buildSliders();
@@ -218,7 +237,7 @@ export class Editor extends EventTarget {
     this.dirtySince = null;
     const reframe = this.reframe;
     this.reframe = false;
-    const request = { generator: this.spec.name, params: this.params.slice(), lod: this.lod, cameras: this.cameras.slice() };
+    const request = { generator: this.spec.name, params: this.params.slice(), lod: this.lod, cameras: this.cameras.slice(), colors: this.colors, useColors: this.useColors };
     try {
       const t0 = performance.now();
       const { glb, ms } = await this.client.call(REQUESTS.GENERATE_GLB, request);

@@ -64,6 +64,16 @@ function similarityChange(r) {
 }
 
 /**
+ * What the page says about the part colours a fit measured: nothing when every part was seen,
+ * else which parts borrowed a neighbour's colour or kept the default.
+ * @param {{ colors?: Record<string, number[]>, colorNote?: string | null }} r
+ */
+function colorNote(r) {
+  if (!r.colors) return '';
+  return r.colorNote ? ` Colours from the photos; ${r.colorNote}.` : ' Colours from the photos.';
+}
+
+/**
  * Runs a fit and hands its model to the editor; `start`: parameters to start from.
  * @param {{ generator: string, start?: number[] | null }} o
  */
@@ -88,14 +98,16 @@ async function runFit({ generator, start = null }) {
     // A fitted model opens at its generator's export detail at least (a building's windows
     // are glass from HIGH up: the windows the photo shows).
     const lod = Math.max(state.editor.lod, specOf(r.generator)?.fitted_lod ?? 0);
-    chooseGenerator(r.generator, { params: r.params, lod, preset: 'fitted', cameras: r.cameras });
+    // A refit that kept the model keeps its colours too; a new fit brings the photos' colours.
+    const colors = r.colors ?? (kept ? state.editor.colors : null);
+    chooseGenerator(r.generator, { params: r.params, lod, preset: 'fitted', cameras: r.cameras, colors });
     say(
       fitMessage,
       out.cancelled
         ? `Stopped after ${out.seconds.toFixed(1)} s; the best model so far is below.`
         : kept
           ? `Refitted in ${out.seconds.toFixed(1)} s (${r.evaluations.toLocaleString('en')} evaluations): nothing closer to the photos than your model was found, so it is kept.`
-          : `${start ? 'Refitted' : 'Fitted'} in ${out.seconds.toFixed(1)} s (${r.evaluations.toLocaleString('en')} evaluations)${similarityChange(r)}. Edit the model below; Reset returns to the fitted values.`,
+          : `${start ? 'Refitted' : 'Fitted'} in ${out.seconds.toFixed(1)} s (${r.evaluations.toLocaleString('en')} evaluations)${similarityChange(r)}. Edit the model below; Reset returns to the fitted values.${colorNote(r)}`,
       'info',
     );
     outcome = out.cancelled ? 'cancelled' : 'done';

@@ -58,7 +58,9 @@ export class FitRunner extends EventTarget {
     const masks = photos.map((p) => {
       const codes = fitCodes(p);
       const windows = useWindows ? fitWindows(p) : null;
-      return { width: p.mask.width, height: p.mask.height, codes: codes.buffer, windows: windows?.buffer ?? null, focal_35mm: p.focal35mm ?? null };
+      // The photo's pixels at the mask's size: the fitted model's part colours are measured in them.
+      const rgba = photoPixels(p);
+      return { width: p.mask.width, height: p.mask.height, codes: codes.buffer, windows: windows?.buffer ?? null, rgba, focal_35mm: p.focal35mm ?? null };
     });
     const fitId = nextFit++;
     const t0 = performance.now();
@@ -78,7 +80,7 @@ export class FitRunner extends EventTarget {
       const out = await this.client.call(
         REQUESTS.FIT_RUN,
         { fitId, generator, seed: 1, quality, masks, ...(start ? { start } : {}) },
-        { transfer: masks.flatMap((m) => (m.windows ? [m.codes, m.windows] : [m.codes])), onEvent: (event, data) => event === 'progress' && this.progress(data, t0) },
+        { transfer: masks.flatMap((m) => (m.windows ? [m.codes, m.windows, m.rgba] : [m.codes, m.rgba])), onEvent: (event, data) => event === 'progress' && this.progress(data, t0) },
       );
       return { ...out, seconds: (performance.now() - t0) / 1000 };
     } finally {

@@ -51,16 +51,17 @@ function fillPresets(spec, selected) {
 /**
  * Switches to `name` with its first preset (or defaults), or with the given parameters.
  * @param {string} name
- * @param {{ params?: number[] | null, lod?: number | null, preset?: string, cameras?: number[] }} [o]
+ * @param {{ params?: number[] | null, lod?: number | null, preset?: string, cameras?: number[], colors?: Record<string, number[]> | null }} [o]
  */
-export function chooseGenerator(name, { params = null, lod = null, preset = undefined, cameras = [] } = {}) {
+export function chooseGenerator(name, { params = null, lod = null, preset = undefined, cameras = [], colors = null } = {}) {
   const spec = state.specs.find((g) => g.name === name);
   if (!spec) return;
   $(`gen-${name}`).checked = true;
   const first = preset === undefined ? spec.presets[0] : null;
   fillPresets(spec, preset ?? first?.name ?? '');
   state.presetName = preset ?? first?.name ?? null;
-  state.editor.open(name, params ?? first?.values ?? null, lod ?? state.editor.lod, cameras);
+  state.editor.open(name, params ?? first?.values ?? null, lod ?? state.editor.lod, cameras, colors);
+  showPhotoColors();
   $('lod').value = String(state.editor.lod);
   renderWindowTools();
   renderTreeLabels();
@@ -82,13 +83,23 @@ function updateButtons() {
   $('redo').disabled = !ed.redoStack.length;
 }
 
+/**
+ * The "Colours from the photo" toggle: shown when the model has colours from photos, checked
+ * when they are used.
+ */
+export function showPhotoColors() {
+  const ed = state.editor;
+  $('photo-colors-label').hidden = !ed.colors;
+  /** @type {HTMLInputElement} */ ($('photo-colors')).checked = ed.useColors;
+}
+
 /** @param {File} file */
 export async function openModelFile(file) {
   say(outMessage, '');
   try {
     const bytes = await file.arrayBuffer();
     const m = await client.call(REQUESTS.OPEN_MODEL, { bytes }, { transfer: [bytes] });
-    chooseGenerator(m.generator, { params: m.params, lod: m.lod, preset: 'custom' });
+    chooseGenerator(m.generator, { params: m.params, lod: m.lod, preset: 'custom', colors: m.colors });
     say(outMessage, `Opened “${file.name}”. Edit it above.`, 'info');
     $('step-model').scrollIntoView({ behavior: 'smooth', block: 'start' });
   } catch (err) {
@@ -115,6 +126,7 @@ export function setUpModelStep() {
     viewer.setPartColors(e.target.checked);
     renderLegend();
   });
+  $('photo-colors').addEventListener('change', (e) => editor.setUseColors(e.target.checked));
   $('reframe').addEventListener('click', () => viewer.frame());
   $('undo').addEventListener('click', () => editor.undo());
   $('redo').addEventListener('click', () => editor.redo());

@@ -34,7 +34,7 @@ export function persist() {
 /**
  * Restores the saved session, if any, and says so with a way to start over. `show` puts the
  * restored photos and model on the page.
- * @param {{ photosRestored: () => void, openModel: (generator: string, o: { params: number[], lod: number, preset: string, cameras: number[] }) => void }} show
+ * @param {{ photosRestored: () => void, openModel: (generator: string, o: { params: number[], lod: number, preset: string, cameras: number[], colors?: Record<string, number[]> | null }) => void }} show
  */
 export async function restore(show) {
   const rec = await store.load();
@@ -53,8 +53,12 @@ export async function restore(show) {
   show.photosRestored();
   const m = rec.model;
   if (m && state.specs.some((g) => g.name === m.generator)) {
-    show.openModel(m.generator, { params: m.params, lod: m.lod, preset: m.presetName ?? 'custom', cameras: m.cameras ?? [] });
+    show.openModel(m.generator, { params: m.params, lod: m.lod, preset: m.presetName ?? 'custom', cameras: m.cameras ?? [], colors: m.colors ?? null });
     if (Array.isArray(m.base) && m.base.length === m.params.length) state.editor.base = m.base;
+    if (m.useColors === false && state.editor.colors) {
+      state.editor.setUseColors(false);
+      /** @type {HTMLInputElement} */ ($('photo-colors')).checked = false;
+    }
   }
   // Back to the step the person was working in.
   const step = rec.step && document.getElementById(rec.step);

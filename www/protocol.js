@@ -90,7 +90,7 @@ export const REQUESTS = Object.freeze({
  * 'sys/ready' (`protocol`), and the page refuses a worker that speaks another one (an old
  * worker.js from a cache, say) with a message that says to reload.
  */
-export const PROTOCOL_VERSION = 8;
+export const PROTOCOL_VERSION = 9;
 
 /**
  * An error as it crosses the protocol: `panic` when a trap poisoned the worker.

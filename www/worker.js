@@ -23,24 +23,24 @@ const handlers = {
   [REQUESTS.THREAD_PROBE]: ({ jobs = 64 } = {}) => ({ threads: wasm.threadProbe(jobs) }),
   [REQUESTS.DEBUG_PANIC]: () => wasm.debugPanic(),
   [REQUESTS.GENERATOR_SPECS]: () => wasm.generatorSpecs(),
-  [REQUESTS.GENERATE_GLB]: ({ generator, params, lod, cameras = [] }) => {
+  [REQUESTS.GENERATE_GLB]: ({ generator, params, lod, cameras = [], colors = null, useColors = true }) => {
     const t0 = performance.now();
-    const bytes = wasm.generateGlb(generator, Float64Array.from(params), lod, Float32Array.from(cameras));
+    const bytes = wasm.generateGlb(generator, Float64Array.from(params), lod, Float32Array.from(cameras), partColors(colors, useColors));
     const ms = performance.now() - t0;
     // wasm-bindgen returns a fresh copy, so its buffer can be handed over without another copy.
     return new Transfer({ glb: bytes.buffer, ms }, [bytes.buffer]);
   },
-  [REQUESTS.EXPORT_FILES]: ({ generator, params, lod, cameras = [], format, compact = false, fileName }) => {
+  [REQUESTS.EXPORT_FILES]: ({ generator, params, lod, cameras = [], colors = null, useColors = true, format, compact = false, fileName }) => {
     const files = wasm
-      .exportFiles(generator, Float64Array.from(params), lod, Float32Array.from(cameras), format, compact, fileName)
+      .exportFiles(generator, Float64Array.from(params), lod, Float32Array.from(cameras), partColors(colors, useColors), format, compact, fileName)
       .map((bytes) => bytes.buffer);
     return new Transfer({ files }, files);
   },
   [REQUESTS.IOU64]: ({ a, b, lod = 1, side = 128 }) => ({
     iou: wasm.iou64Models(a.generator, Float64Array.from(a.params), b.generator, Float64Array.from(b.params), lod, side),
   }),
-  [REQUESTS.PARAMS_JSON]: ({ generator, params, lod }) => ({
-    text: wasm.paramsJson(generator, Float64Array.from(params), lod),
+  [REQUESTS.PARAMS_JSON]: ({ generator, params, lod, colors = null, useColors = true }) => ({
+    text: wasm.paramsJson(generator, Float64Array.from(params), lod, partColors(colors, useColors)),
   }),
   [REQUESTS.OPEN_MODEL]: ({ bytes }) => wasm.openModel(new Uint8Array(bytes)),
   [REQUESTS.MASK_AUTO]: ({ key, width, height, rgba }) => {
@@ -107,6 +107,14 @@ const handlers = {
   },
 };
 
+/**
+ * The part colours a model is written with: the photos' colours (`{ part: [r, g, b] }`) unless
+ * the page's "Colours from the photo" is off, else null (the generator's defaults).
+ */
+function partColors(colors, useColors) {
+  return useColors !== false && colors ? colors : null;
+}
+
 /** Mask sessions by the page's photo key; fits in progress by id. */
 const masks = new Map();
 const fits = new Map();
@@ -172,13 +180,25 @@ async function runFit({ fitId, generator, seed = 1, quality = 1, start = [], mas
     windowFlags,
     windowCodes,
   );
+  // The photos' pixels (one per view, at its mask's size) for the part colours, when sent.
+  const withPhotos = views.every((m) => m.rgba && m.rgba.byteLength === 4 * m.width * m.height);
+  const colorsOf = () => {
+    if (!withPhotos) return null;
+    const rgba = new Uint8Array(4 * total);
+    let at = 0;
+    for (const m of views) {
+      rgba.set(new Uint8Array(m.rgba), at);
+      at += 4 * m.width * m.height;
+    }
+    return session.partColors(rgba);
+  };
   return stepFit(fitId, session, emit, (due) => {
     // The silhouette preview of the best model so far (0..255 coverage), with each progress.
     const w = due ? session.previewWidth() : 0;
     if (!w) return [null, []];
     const coverage = session.previewCoverage();
     return [{ width: w, height: session.previewHeight(), coverage: coverage.buffer }, [coverage.buffer]];
-  });
+  }, colorsOf);
 }
 
 /**
@@ -187,7 +207,7 @@ async function runFit({ fitId, generator, seed = 1, quality = 1, start = [], mas
  * returns a picture ([picture, transfer]; `due` says progress goes out anyway); frees the
  * session at the end.
  */
-async function stepFit(fitId, session, emit, preview) {
+async function stepFit(fitId, session, emit, preview, colorsOf = () => null) {
   const job = { cancelled: false };
   fits.set(fitId, job);
   try {
@@ -207,7 +227,11 @@ async function stepFit(fitId, session, emit, preview) {
       await tick();
       if (job.cancelled) break;
     }
-    return { cancelled: job.cancelled, result: session.result() };
+    const result = session.result();
+    // The part colours of the model the fit ends with (also when cancelled: it is shown).
+    const colors = colorsOf();
+    if (colors) Object.assign(result, { colors: colors.colors, colorParts: colors.parts, colorNote: colors.note });
+    return { cancelled: job.cancelled, result };
   } finally {
     fits.delete(fitId);
     session.free();
@@ -233,7 +257,7 @@ async function runTreeFit({ fitId, seed = 1, quality = 1, width, height, rgba, c
     if (!w) return [null, []];
     const labels = session.previewLabels();
     return [{ width: w, height: session.previewHeight(), labels: labels.buffer }, [labels.buffer]];
-  });
+  }, () => session.partColors(width, height, labels, new Uint8Array(rgba)));
 }
 
 /** A handler's result whose buffers move to the page instead of being copied. */

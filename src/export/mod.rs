@@ -92,10 +92,7 @@ pub fn write_model(
     options: ExportOptions,
     main: &Path,
 ) -> Result<(Exported, Mesh), GlbError> {
-    let mesh = model
-        .generator
-        .generate(&model.params, model.lod)
-        .map_err(|e| GlbError::Export(e.to_string()))?;
+    let mesh = model.mesh().map_err(|e| GlbError::Export(e.to_string()))?;
     let exported = write_mesh(&mesh, Some(model), cameras, format, options, main)?;
     Ok((exported, mesh))
 }

@@ -26,13 +26,10 @@ const GLASS_ALPHA: f32 = 0.35;
 /// Alpha cutoff of alpha-masked parts (leaves), the glTF default.
 const MASK_CUTOFF: f32 = 0.5;
 
-/// Writes `model`'s mesh (at the model's level of detail) as a GLB, with its generator state in
+/// Writes `model`'s mesh (at the model's level of detail, its parts in the model's colours) as a GLB, with its generator state in
 /// the scene extras and one camera node per entry of `cameras`.
 pub fn export_model(model: &Model, cameras: &[ExportCamera]) -> Result<Vec<u8>, GlbError> {
-    let mesh = model
-        .generator
-        .generate(&model.params, model.lod)
-        .map_err(|e| GlbError::Export(e.to_string()))?;
+    let mesh = model.mesh().map_err(|e| GlbError::Export(e.to_string()))?;
     write_glb(&mesh, Some(&model.to_doc()), cameras)
 }
 
@@ -82,12 +79,27 @@ pub fn write_glb_with(
     let mut bin = Vec::new();
 
     let mut part_nodes = Vec::new();
+    // Each procedural texture is written once, for the first part that uses it.
+    let mut textures: HashMap<Texture, json::Index<json::Texture>> = HashMap::new();
     for (part_id, part) in mesh.parts.iter().enumerate() {
         let Some(split) = split_part(mesh, part_id) else {
             // A part without triangles at this level of detail: glTF forbids empty accessors.
             continue;
         };
-        let material = root.push(material(part));
+        let texture = match texture_of(part) {
+            Some(kind) => match textures.get(&kind) {
+                Some(&t) => Some(t),
+                None => {
+                    let t = write_texture(&mut root, &mut bin, kind);
+                    if let Some(t) = t {
+                        textures.insert(kind, t);
+                    }
+                    t
+                }
+            },
+            None => None,
+        };
+        let material = root.push(material_with(part, texture));
         let (primitive, transform) =
             write_primitive(&mut root, &mut bin, &split, material, options.quantize)?;
         let mesh_index = root.push(json::Mesh {
@@ -479,6 +491,82 @@ fn write_primitive(
     Ok((primitive, transform))
 }
 
+/// A procedural texture ([`super::textures`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum Texture {
+    /// Leaf clusters with an alpha cut-out, for leaf cards (UVs 0–1 over the card).
+    Leaves,
+    /// Tiling bark, for trunks and branches (u around the stem, v along it in metres).
+    Bark,
+}
+
+/// The texture a part's look calls for, if any.
+fn texture_of(part: &Part) -> Option<Texture> {
+    match look(part) {
+        Look::Foliage => Some(Texture::Leaves),
+        Look::Bark => Some(Texture::Bark),
+        _ => None,
+    }
+}
+
+/// Embeds `kind`'s PNG in `bin` (its own buffer view) as an image with a sampler and returns
+/// the texture; `None` if the PNG could not be made (the part is then untextured).
+fn write_texture(
+    root: &mut json::Root,
+    bin: &mut Vec<u8>,
+    kind: Texture,
+) -> Option<json::Index<json::Texture>> {
+    use json::texture::{MagFilter, MinFilter, Sampler, WrappingMode};
+    let (png, name, wrap) = match kind {
+        Texture::Leaves => (
+            super::textures::leaf_png(),
+            "leaves",
+            WrappingMode::ClampToEdge,
+        ),
+        Texture::Bark => (super::textures::bark_png(), "bark", WrappingMode::Repeat),
+    };
+    if png.is_empty() {
+        return None;
+    }
+    let offset = bin.len();
+    bin.extend_from_slice(png);
+    bin.resize(bin.len().next_multiple_of(4), 0);
+    let view = root.push(json::buffer::View {
+        buffer: json::Index::new(0),
+        byte_length: USize64::from(png.len()),
+        byte_offset: Some(USize64::from(offset)),
+        byte_stride: None,
+        name: None,
+        target: None,
+        extensions: None,
+        extras: None,
+    });
+    let image = root.push(json::Image {
+        buffer_view: Some(view),
+        mime_type: Some(json::image::MimeType("image/png".into())),
+        name: Some(name.into()),
+        uri: None,
+        extensions: None,
+        extras: None,
+    });
+    let sampler = root.push(Sampler {
+        mag_filter: Some(Valid(MagFilter::Linear)),
+        min_filter: Some(Valid(MinFilter::LinearMipmapLinear)),
+        name: None,
+        wrap_s: Valid(wrap),
+        wrap_t: Valid(wrap),
+        extensions: None,
+        extras: None,
+    });
+    Some(root.push(json::Texture {
+        name: Some(name.into()),
+        sampler: Some(sampler),
+        source: image,
+        extensions: None,
+        extras: None,
+    }))
+}
+
 /// What a part's material looks like, decided from its name and default colour.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Look {
@@ -490,6 +578,8 @@ enum Look {
     Foliage,
     /// Any other part whose default colour is translucent: alpha-blended.
     Translucent,
+    /// Bark (trunks, branches): opaque, rough, with the bark texture.
+    Bark,
 }
 
 fn look(part: &Part) -> Look {
@@ -500,9 +590,27 @@ fn look(part: &Part) -> Look {
         Look::Foliage
     } else if part.color[3] < 1.0 {
         Look::Translucent
+    } else if name.contains("trunk") || name.contains("branch") || name.contains("bark") {
+        Look::Bark
     } else {
         Look::Opaque
     }
+}
+
+/// Whether a part is an ordinary opaque surface (not glass, leaves or translucent; bark is):
+/// one whose colour may be lent to or borrowed from a neighbour ([`crate::colors`]).
+pub(crate) fn is_plain(part: &Part) -> bool {
+    matches!(look(part), Look::Opaque | Look::Bark)
+}
+
+/// Whether a part is leaves (alpha-masked, with the leaf texture).
+pub(crate) fn is_foliage(part: &Part) -> bool {
+    look(part) == Look::Foliage
+}
+
+/// Whether a part is bark (a trunk or branches, with the bark texture).
+pub(crate) fn is_bark(part: &Part) -> bool {
+    look(part) == Look::Bark
 }
 
 /// A part's linear RGBA base colour as every format writes it: [`Part::color`] clamped to
@@ -522,8 +630,13 @@ pub(crate) fn base_color(part: &Part) -> [f32; 4] {
     color
 }
 
-/// The PBR material of a part: base colour from [`base_color`], dielectric.
+/// The PBR material of a part: base colour from [`base_color`], dielectric, untextured.
 fn material(part: &Part) -> json::Material {
+    material_with(part, None)
+}
+
+/// [`material`] with `texture` as its base colour texture (multiplied by the base colour).
+fn material_with(part: &Part, texture: Option<json::Index<json::Texture>>) -> json::Material {
     use json::material::{AlphaCutoff, AlphaMode, PbrBaseColorFactor, StrengthFactor};
     let color = base_color(part);
     let look = look(part);
@@ -532,6 +645,7 @@ fn material(part: &Part) -> json::Material {
         Look::Glass => (AlphaMode::Blend, None, 0.05, true),
         Look::Foliage => (AlphaMode::Mask, Some(AlphaCutoff(MASK_CUTOFF)), 0.7, true),
         Look::Translucent => (AlphaMode::Blend, None, 0.3, false),
+        Look::Bark => (AlphaMode::Opaque, None, 0.9, false),
     };
     json::Material {
         alpha_cutoff,
@@ -542,6 +656,12 @@ fn material(part: &Part) -> json::Material {
             base_color_factor: PbrBaseColorFactor(color),
             metallic_factor: StrengthFactor(0.0),
             roughness_factor: StrengthFactor(roughness),
+            base_color_texture: texture.map(|index| json::texture::Info {
+                index,
+                tex_coord: 0,
+                extensions: None,
+                extras: None,
+            }),
             ..Default::default()
         },
         ..Default::default()
@@ -568,6 +688,8 @@ mod tests {
         check(part("leaves", 1.0), Look::Foliage);
         check(part("leaf_cards", 1.0), Look::Foliage);
         check(part("veil", 0.5), Look::Translucent);
+        check(part("trunk", 1.0), Look::Bark);
+        check(part("branch", 1.0), Look::Bark);
     }
 
     #[test]

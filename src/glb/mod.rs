@@ -11,6 +11,8 @@
 //! - [`import`] reads any GLB (or OBJ) back as a [`ReferenceMesh`] with node transforms applied,
 //!   and a procfit GLB also as its generator state, so that [`ImportedGlb::model`] gives back
 //!   the exact [`Model`](crate::model::Model) that was exported.
+//! - [`textures`] makes the leaf and bark textures the export embeds for trees' leaf cards
+//!   (alpha-masked) and stems.
 //!
 //! # Conventions and scale
 //! glTF's own: Y up, right-handed, +Z toward the viewer, a camera looks down its local −Z with
@@ -28,9 +30,11 @@
 mod camera;
 pub mod export;
 pub mod import;
+pub mod textures;
 
 pub use camera::{CAMERA_FLOATS, ExportCamera};
 pub use export::{GlbOptions, export_model, write_glb, write_glb_with};
+pub(crate) use export::{is_bark, is_foliage, is_plain};
 pub use import::{ImportedGlb, ReferenceMesh, import_glb, import_obj, import_reference};
 
 use std::fmt;

@@ -12,6 +12,8 @@ use wasm_bindgen::prelude::*;
 #[wasm_bindgen]
 pub struct FitSession {
     session: Session,
+    /// The masks fitted (for the part colours' don't-care and object pixels).
+    masks: Vec<Mask>,
     /// The last progress's silhouette preview (view 0), as 0..255 coverage.
     preview: Option<(u32, u32, Vec<u8>)>,
 }
@@ -176,9 +178,10 @@ impl FitSession {
             ..FitConfig::default()
         };
         let masks = masks_of(widths, heights, codes)?;
-        let session = Session::new(config, masks).map_err(js)?;
+        let session = Session::new(config, masks.clone()).map_err(js)?;
         Ok(FitSession {
             session,
+            masks,
             preview: None,
         })
     }
@@ -222,6 +225,47 @@ impl FitSession {
     #[wasm_bindgen(js_name = previewCoverage)]
     pub fn preview_coverage(&self) -> Vec<u8> {
         self.preview.as_ref().map_or_else(Vec::new, |p| p.2.clone())
+    }
+
+    /// The part colours of the best model so far, measured in the photos: `rgba` holds one
+    /// sRGB RGBA photo per view at its mask's size, concatenated (the masks' sizes). Returns
+    /// `{ colors: { part: [r, g, b] }, parts: [{ part, color, source, from }], note }`:
+    /// `colors` what the model takes (measured or borrowed), `parts` where each part's colour
+    /// comes from (`photo`, `neighbour` of `from`, or `default`), `note` a sentence on the
+    /// parts the photos do not show, or `null`.
+    #[wasm_bindgen(js_name = partColors)]
+    pub fn part_colors(&self, rgba: &[u8]) -> Result<JsValue, JsError> {
+        use crate::colors::{self, Rgba};
+        let r = self.session.result().map_err(js)?;
+        let masks = &self.masks;
+        let mut photos = Vec::with_capacity(masks.len());
+        let mut at = 0usize;
+        for m in masks {
+            let n = 4 * m.width() as usize * m.height() as usize;
+            let Some(pixels) = rgba.get(at..at + n) else {
+                return Err(JsError::new(
+                    "the photo bytes are shorter than the masks say",
+                ));
+            };
+            photos.push(Rgba {
+                width: m.width(),
+                height: m.height(),
+                pixels,
+            });
+            at += n;
+        }
+        if at != rgba.len() {
+            return Err(JsError::new(
+                "the photo bytes are longer than the masks say",
+            ));
+        }
+        let mesh = r
+            .model
+            .generator
+            .generate(&r.model.params, r.model.lod)
+            .map_err(js)?;
+        let found = colors::estimate(&mesh, &r.views, &photos, masks).map_err(js)?;
+        super::colors_out(&found)
     }
 
     /// The best model so far (the result once done).

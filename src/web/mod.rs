@@ -136,6 +136,8 @@ struct ModelOut {
     params: Vec<f64>,
     lod: u8,
     seed: Option<u64>,
+    /// Part colours by part name (linear RGB), `{}` when the model has none.
+    colors: crate::model::PartColors,
 }
 
 impl From<&crate::model::Model> for ModelOut {
@@ -145,6 +147,7 @@ impl From<&crate::model::Model> for ModelOut {
             params: m.params.clone(),
             lod: m.lod as u8,
             seed: m.seed,
+            colors: m.colors.clone(),
         }
     }
 }
@@ -154,6 +157,73 @@ fn model_of(generator: &str, params: &[f64], lod: u8) -> Result<crate::model::Mo
     let lod = crate::generators::Lod::from_index(usize::from(lod))
         .ok_or_else(|| JsError::new(&format!("level of detail {lod} is not in 0..=3")))?;
     crate::model::Model::new(generator, params, lod).map_err(js)
+}
+
+/// [`model_of`] with part colours: `colors` is `{ part: [r, g, b] }` (linear, 0–1), or
+/// `null`/`undefined` for the generator's defaults.
+fn colored_model_of(
+    generator: &str,
+    params: &[f64],
+    lod: u8,
+    colors: JsValue,
+) -> Result<crate::model::Model, JsError> {
+    let model = model_of(generator, params, lod)?;
+    if colors.is_null() || colors.is_undefined() {
+        return Ok(model);
+    }
+    let colors: crate::model::PartColors = serde_wasm_bindgen::from_value(colors)
+        .map_err(|e| JsError::new(&format!("part colours: {e}")))?;
+    model.with_colors(&colors).map_err(js)
+}
+
+/// Part colours measured in the photos as the page takes them: `{ colors: { part: [r, g, b] },
+/// parts: [{ part, color, source, from }], note }` — `colors` what the model takes (measured or
+/// borrowed), `parts` where each part's colour comes from (`photo`, `neighbour` of `from`, or
+/// `default`), `note` a sentence on the parts the photos do not show, or `null`.
+pub(crate) fn colors_out(found: &[crate::colors::PartColor]) -> Result<JsValue, JsError> {
+    use crate::colors::{self, Source};
+    #[derive(serde::Serialize)]
+    struct PartOut {
+        part: &'static str,
+        color: [f32; 3],
+        source: &'static str,
+        from: Option<&'static str>,
+    }
+    #[derive(serde::Serialize)]
+    struct ColorsOut {
+        colors: crate::model::PartColors,
+        parts: Vec<PartOut>,
+        note: Option<String>,
+    }
+    let out = ColorsOut {
+        colors: colors::to_part_colors(found),
+        parts: found
+            .iter()
+            .map(|c| {
+                let (source, from) = match c.source {
+                    Source::Photo { .. } => ("photo", None),
+                    Source::Neighbour(f) => ("neighbour", Some(f)),
+                    Source::Default => ("default", None),
+                };
+                PartOut {
+                    part: c.part,
+                    color: c.color,
+                    source,
+                    from,
+                }
+            })
+            .collect(),
+        note: colors::unseen_note(found),
+    };
+    to_js(&out)
+}
+
+/// A value for JavaScript with maps as plain objects (the page stores them in IndexedDB and
+/// sends them back as objects).
+pub(crate) fn to_js<T: serde::Serialize>(value: &T) -> Result<JsValue, JsError> {
+    value
+        .serialize(&serde_wasm_bindgen::Serializer::json_compatible())
+        .map_err(js)
 }
 
 pub use crate::glb::CAMERA_FLOATS;
@@ -166,15 +236,17 @@ pub(crate) fn js(e: impl std::fmt::Display) -> JsError {
 
 /// Generates the model's mesh and writes it as the very GLB the page downloads (generator state
 /// in the scene extras, one camera node per photo from `cameras`, see [`CAMERA_FLOATS`]). The
-/// viewer loads these bytes, so what is shown is what is saved.
+/// viewer loads these bytes, so what is shown is what is saved. `colors`: the part colours (see
+/// `colored_model_of`), or `null`.
 #[wasm_bindgen(js_name = generateGlb)]
 pub fn generate_glb(
     generator: &str,
     params: &[f64],
     lod: u8,
     cameras: &[f32],
+    colors: JsValue,
 ) -> Result<Vec<u8>, JsError> {
-    let model = model_of(generator, params, lod)?;
+    let model = colored_model_of(generator, params, lod, colors)?;
     let cameras = cameras_of(cameras)?;
     crate::glb::export_model(&model, &cameras).map_err(js)
 }
@@ -183,17 +255,22 @@ pub fn generate_glb(
 /// quantised GLB), as the files to save: `[main]`, or for OBJ `[obj, mtl]`, the OBJ naming its
 /// MTL after `file_name` (the name the main file is saved as).
 #[wasm_bindgen(js_name = exportFiles)]
+#[allow(
+    clippy::too_many_arguments,
+    reason = "flat values are what crosses the wasm boundary cheaply"
+)]
 pub fn export_files(
     generator: &str,
     params: &[f64],
     lod: u8,
     cameras: &[f32],
+    colors: JsValue,
     format: &str,
     compact: bool,
     file_name: &str,
 ) -> Result<js_sys::Array, JsError> {
     use crate::export::{ExportOptions, Format};
-    let model = model_of(generator, params, lod)?;
+    let model = colored_model_of(generator, params, lod, colors)?;
     let cameras = cameras_of(cameras)?;
     let format = Format::parse(format).map_err(|e| JsError::new(&e))?;
     let (files, _) = crate::export::write_model(
@@ -259,19 +336,25 @@ pub fn iou64_models(
     .map_err(js)
 }
 
-/// The params JSON of a model (what "download params" saves).
+/// The params JSON of a model (what "download params" saves), with its part colours (or
+/// `null`).
 #[wasm_bindgen(js_name = paramsJson)]
-pub fn params_json(generator: &str, params: &[f64], lod: u8) -> Result<String, JsError> {
-    Ok(model_of(generator, params, lod)?.to_json())
+pub fn params_json(
+    generator: &str,
+    params: &[f64],
+    lod: u8,
+    colors: JsValue,
+) -> Result<String, JsError> {
+    Ok(colored_model_of(generator, params, lod, colors)?.to_json())
 }
 
 /// Opens a file the user gave to continue editing: a procfit GLB (told by its magic) or params
-/// JSON. Returns `{ generator, params, lod, seed }` with the parameters validated and clamped;
+/// JSON. Returns `{ generator, params, lod, seed, colors }` with the parameters validated and clamped;
 /// a GLB from another tool, or JSON that is not procfit's, is an error saying so.
 #[wasm_bindgen(js_name = openModel)]
 pub fn open_model(bytes: &[u8]) -> Result<JsValue, JsError> {
     let model = crate::model::Model::from_file_bytes(bytes).map_err(js)?;
-    serde_wasm_bindgen::to_value(&ModelOut::from(&model)).map_err(js)
+    to_js(&ModelOut::from(&model))
 }
 
 /// The 35 mm-equivalent focal length from a photo file's EXIF (the original bytes: the page's

@@ -222,6 +222,31 @@ impl TreeFitSession {
             .map_or_else(Vec::new, |p| p.labels().to_vec())
     }
 
+    /// The part colours of the best tree so far from its photo: `labels` the photo's branch and
+    /// leaf labels the fit used (`treeLabels`), `rgba` the photo at their size. Returns what
+    /// `FitSession.partColors` does.
+    #[wasm_bindgen(js_name = partColors)]
+    pub fn part_colors(
+        &self,
+        width: u32,
+        height: u32,
+        labels: &[u8],
+        rgba: &[u8],
+    ) -> Result<JsValue, JsError> {
+        let fit = self.session.result().map_err(js)?;
+        let labels = labels_from_values(width, height, labels.to_vec()).map_err(js)?;
+        let mesh = crate::generators::tree::TreeGenerator
+            .generate(&fit.params, crate::generators::Lod::Low)
+            .map_err(js)?;
+        let photo = crate::colors::Rgba {
+            width,
+            height,
+            pixels: rgba,
+        };
+        let found = crate::colors::from_tree_labels(&mesh, &labels, &photo).map_err(js)?;
+        super::colors_out(&found)
+    }
+
     /// The best tree so far (the result once done) and the photo's camera.
     pub fn result(&self) -> Result<JsValue, JsError> {
         let fit = self.session.result().map_err(js)?;

@@ -146,6 +146,23 @@ test('the fit runs with progress, draws its outline, and the editor gets the fit
   const issues = await validate(bytes);
   assert.equal(issues.numErrors, 0, JSON.stringify(issues.messages.slice(0, 5)));
   await screenshot(page, '02c-fitted');
+
+  // The fitted model is in the colours measured in the photo (issue 17): the GLB's materials
+  // carry them, and "Colours from the photo" switches back to the generator's and again.
+  const colors = await page.evaluate(() => window.procfit.editor.colors);
+  assert.ok(colors && colors.body?.length === 3, `no part colours from the photo: ${JSON.stringify(colors)}`);
+  assert.ok(await page.isVisible('#photo-colors-label'));
+  assert.ok(await page.isChecked('#photo-colors'));
+  const near = (a, b) => a.every((v, i) => Math.abs(v - b[i]) < 1e-6);
+  assert.ok(near(bodyColour(bytes), colors.body), `${bodyColour(bytes)} vs ${colors.body}`);
+  await page.uncheck('#photo-colors');
+  await settled();
+  const plain = bodyColour(Buffer.from(await page.evaluate(() => Array.from(window.procfit.editor.glb.bytes))));
+  assert.ok(!near(plain, colors.body), 'the toggle did not restore the default colours');
+  await page.check('#photo-colors');
+  await settled();
+  const again = bodyColour(Buffer.from(await page.evaluate(() => Array.from(window.procfit.editor.glb.bytes))));
+  assert.ok(near(again, colors.body));
 });
 
 test('a long fit can be cancelled and keeps the best model so far', async () => {
@@ -355,6 +372,9 @@ test('the downloaded GLB is the model shown, passes the glTF validator and opens
   const doc = JSON.parse(json.bytes.toString('utf8'));
   assert.equal(doc.generator, 'dish');
   assert.equal(doc.params.handle_center_y, 0.7);
+  // The photo's colours go with the model into the params JSON too.
+  assert.deepEqual(Object.keys(doc.colors ?? {}).includes('body'), true, JSON.stringify(doc.colors));
+  const savedColors = await page.evaluate(() => window.procfit.editor.colors);
 
   // Change the model, then open the saved GLB: the editor comes back to the saved state.
   await page.selectOption('#preset', 'bowl');
@@ -362,6 +382,7 @@ test('the downloaded GLB is the model shown, passes the glTF validator and opens
   await page.setInputFiles('#open-model', { name: 'saved.glb', mimeType: 'model/gltf-binary', buffer: glb.bytes });
   await openedMessage('saved.glb');
   assert.deepEqual(await page.evaluate(() => window.procfit.editor.params), shown.params);
+  assert.deepEqual(await page.evaluate(() => window.procfit.editor.colors), savedColors);
   assert.match(await messageOf('out-message'), /Opened “saved\.glb”/);
 
   // And the JSON, after another change.
@@ -371,6 +392,14 @@ test('the downloaded GLB is the model shown, passes the glTF validator and opens
   await openedMessage('saved.json');
   assert.deepEqual(await page.evaluate(() => window.procfit.editor.params), shown.params);
 });
+
+/** The base colour (RGB) of the `body` part's material in a GLB. */
+function bodyColour(bytes) {
+  const jsonLength = bytes.readUInt32LE(12);
+  const gltf = JSON.parse(bytes.subarray(20, 20 + jsonLength).toString('utf8'));
+  const material = gltf.materials.find((m) => m.name === 'body');
+  return material.pbrMetallicRoughness.baseColorFactor.slice(0, 3);
+}
 
 /** Waits for the page to say it opened `name`, then for the model to be on screen. */
 async function openedMessage(name) {

@@ -35,6 +35,12 @@ test('a reload restores photos, masks, the model and its starting point', async 
   // The sample has no EXIF; a focal length as photoOf (main.js) would have read must be kept
   // (page.test.mjs checks the reading itself). The slider change below saves it.
   await page.evaluate(() => (window.procfit.state.photos[0].focal35mm = 35));
+  // Part colours (as a fit measures them in the photos) and "Colours from the photo" switched
+  // off are kept too (issue 17).
+  await page.evaluate(() => {
+    window.procfit.editor.colors = { body: [0.1, 0.2, 0.3] };
+    window.procfit.editor.setUseColors(false);
+  });
   await page.focus('#param-y_scale');
   await page.keyboard.press('End');
   await settled();
@@ -59,6 +65,10 @@ test('a reload restores photos, masks, the model and its starting point', async 
     focal: window.procfit.state.photos[0].focal35mm,
   }));
   assert.equal(afterReload.focal, 35, 'the EXIF focal length was not kept');
+  assert.deepEqual(await page.evaluate(() => window.procfit.editor.colors), { body: [0.1, 0.2, 0.3] });
+  assert.equal(await page.evaluate(() => window.procfit.editor.useColors), false);
+  assert.equal(await page.isVisible('#photo-colors-label'), true);
+  assert.equal(await page.isChecked('#photo-colors'), false);
   assert.equal(afterReload.photos, 1);
   assert.deepEqual(afterReload.params, before.params);
   assert.deepEqual(afterReload.base, before.base);

@@ -140,6 +140,25 @@ test('the fitted tree downloads as a valid GLB with the photo camera', async () 
     externalResourceFunction: (uri) => Promise.reject(new Error(`external resource ${uri}`)),
   });
   assert.equal(report.issues.numErrors, 0, JSON.stringify(report.issues.messages.slice(0, 5)));
+  assert.equal(report.issues.numWarnings, 0, JSON.stringify(report.issues.messages.slice(0, 5)));
+  // Leaves are alpha-masked cards with the leaf texture, stems carry the bark texture, both
+  // embedded PNGs; their colours are the photo's leaf and branch colours (issue 17).
+  assert.equal(gltf.images?.length, 2);
+  assert.ok(gltf.images.every((i) => i.mimeType === 'image/png' && i.bufferView !== undefined));
+  const leaf = gltf.materials.find((m) => m.name === 'leaf');
+  assert.equal(leaf.alphaMode, 'MASK');
+  assert.ok(leaf.pbrMetallicRoughness.baseColorTexture, 'the leaf material has no texture');
+  assert.ok(gltf.materials.find((m) => m.name === 'trunk').pbrMetallicRoughness.baseColorTexture, 'the bark has no texture');
+  const colors = gltf.scenes[0].extras.colors;
+  assert.ok(colors?.leaf && colors?.trunk, `no colours from the photo: ${JSON.stringify(colors)}`);
+  assert.deepEqual(leaf.pbrMetallicRoughness.baseColorFactor.slice(0, 3).map((v) => v.toFixed(5)), colors.leaf.map((v) => v.toFixed(5)));
+  // three.js in the page decoded both textures.
+  const maps = await page.evaluate(() => {
+    const found = [];
+    window.procfit.viewer.scene.traverse((o) => o.material?.map?.image && found.push(`${o.name}:${o.material.map.image.width}`));
+    return found;
+  });
+  assert.ok(maps.some((m) => m.startsWith('leaf:')) && maps.some((m) => m.startsWith('trunk:')), `textures in the view: ${maps}`);
 });
 
 test('"Refit from here" refits the edited tree: its seed stays, it never gets less like the photo', async () => {

@@ -226,6 +226,7 @@ pub fn doc_of(g: &dyn Generator, values: &[f64], lod: Lod, seed: Option<u64>) ->
             .collect(),
         lod: Some(lod as u8),
         seed,
+        colors: Default::default(),
     }
 }
 
