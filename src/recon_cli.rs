@@ -74,6 +74,11 @@ pub struct ReconstructArgs {
     /// a tree keeps its seed and never ends less like the photo than the start.
     #[arg(long)]
     start: Option<PathBuf>,
+    /// Buildings: a window mask per image, in the images' order (white = window; as
+    /// `procfit segment --generator building` writes it, at the mask's working size), so the
+    /// fit gets the floors and window columns right. Give the flag once per image.
+    #[arg(long)]
+    windows: Vec<PathBuf>,
 }
 
 /// The model `--start` names: a params JSON or a procfit GLB.
@@ -150,17 +155,41 @@ fn read_image(path: &Path) -> Result<(Vec<u8>, image::RgbaImage), String> {
 
 /// One view as loaded: its mask at the working size, the file's own size in pixels (upright),
 /// and for a photo with EXIF its field of view.
-struct LoadedView {
-    mask: Mask,
-    file_size: (u32, u32),
-    fov: Option<f64>,
+pub(crate) struct LoadedView {
+    /// The mask the fit uses, at the working size.
+    pub mask: Mask,
+    /// The file's own size (upright).
+    pub file_size: (u32, u32),
+    /// The field of view from the photo's EXIF, when it has one.
+    pub fov: Option<f64>,
+    /// The decoded image at the working size (the photo, or the mask image itself).
+    pub photo: Photo,
+    /// The automatic segmentation when the file is a photo (its confidence, its object mask);
+    /// `None` for a mask image or a photo with transparency.
+    pub segmentation: Option<segment::Segmentation>,
+    /// What to tell the user about the mask (automatic or given) before the fit.
+    pub warnings: Vec<String>,
+}
+
+/// In a grey mask image, this exact level is don't care, as [`Mask::to_luma8`] (and so
+/// `procfit segment`) writes the outline's band; every other level is coverage.
+const DONT_CARE_LEVEL: u8 = 128;
+
+/// A view's mask, warnings printed on stderr (see [`read_view`]).
+fn load_view(path: &Path) -> Result<LoadedView, String> {
+    let view = read_view(path)?;
+    for w in &view.warnings {
+        eprintln!("procfit: {}: {w}", path.display());
+    }
+    Ok(view)
 }
 
 /// A view's mask. The file is decoded once, straight to the working size (a large JPEG by a
 /// scaled DCT decode), so a 4000×3000 mask costs what a 512² one does: a mask image (grey and
 /// nearly binary, or with transparency) becomes soft coverage — the share of object pixels
-/// under each working pixel — and a photo is segmented automatically.
-fn load_view(path: &Path) -> Result<LoadedView, String> {
+/// under each working pixel — with grey [`DONT_CARE_LEVEL`] as don't care, and a photo is
+/// segmented automatically. Nothing is printed: the warnings are returned.
+pub(crate) fn read_view(path: &Path) -> Result<LoadedView, String> {
     let bytes = read(path)?;
     let at = |e: &dyn std::fmt::Display| format!("{}: {e}", path.display());
     let photo = Photo::decode(&bytes, segment::WORKING_SIDE)
@@ -168,39 +197,44 @@ fn load_view(path: &Path) -> Result<LoadedView, String> {
     let (w, h) = (photo.width(), photo.height());
     let file_size = photo.source_size();
     let px = photo.rgba();
-    let coverage = |v: &[u8]| {
-        Mask::new(w, h, v.iter().map(|&c| f32::from(c) / 255.0).collect()).map_err(|e| at(&e))
+    let coverage = |v: &[u8], dont_care: bool| {
+        let values = v
+            .iter()
+            .map(|&c| {
+                if dont_care && c == DONT_CARE_LEVEL {
+                    Mask::DONT_CARE
+                } else {
+                    f32::from(c) / 255.0
+                }
+            })
+            .collect();
+        Mask::new(w, h, values).map_err(|e| at(&e))
     };
-    let mut auto = false;
+    let mut segmentation = None;
+    let mut warnings = Vec::new();
     let mask = if photo.has_alpha() && px.chunks_exact(4).any(|p| p[3] < 128) {
-        coverage(&px.chunks_exact(4).map(|p| p[3]).collect::<Vec<_>>())?
+        coverage(&px.chunks_exact(4).map(|p| p[3]).collect::<Vec<_>>(), false)?
     } else if px.chunks_exact(4).all(|p| p[0] == p[1] && p[1] == p[2])
         && px
             .chunks_exact(4)
-            .filter(|p| p[0] < 16 || p[0] > 239)
+            .filter(|p| p[0] < 16 || p[0] > 239 || p[0] == DONT_CARE_LEVEL)
             .count()
             >= px.len() / 4 * 95 / 100
     {
-        coverage(&px.chunks_exact(4).map(|p| p[0]).collect::<Vec<_>>())?
+        coverage(&px.chunks_exact(4).map(|p| p[0]).collect::<Vec<_>>(), true)?
     } else {
-        auto = true;
         let seg = segment::segment_auto(&photo).map_err(|e| at(&e))?;
-        for w in &seg.warnings {
-            eprintln!("procfit: {}: {w}", path.display());
-        }
-        seg.mask
+        warnings.clone_from(&seg.warnings);
+        let mask = seg.mask.clone();
+        segmentation = Some(seg);
+        mask
     };
-    if !auto {
+    if segmentation.is_none() {
         let obj: Vec<bool> = mask.values().iter().map(|&v| v >= 0.5).collect();
         // An empty or full mask is the fit's one-line error; the rest is said here.
         let area = obj.iter().filter(|&&o| o).count();
-        let said = if area == 0 || area == obj.len() {
-            Vec::new()
-        } else {
-            segment::mask_warnings(&obj, w as usize, h as usize)
-        };
-        for warning in said {
-            eprintln!("procfit: {}: {warning}", path.display());
+        if area != 0 && area != obj.len() {
+            warnings = segment::mask_warnings(&obj, w as usize, h as usize);
         }
     }
     let fov = exif_fov(&bytes, mask.width(), mask.height());
@@ -208,6 +242,9 @@ fn load_view(path: &Path) -> Result<LoadedView, String> {
         mask,
         file_size,
         fov,
+        photo,
+        segmentation,
+        warnings,
     })
 }
 
@@ -290,6 +327,7 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
     if let Some(p) = &a.start {
         plan = plan.input(p);
     }
+    plan = plan.inputs(&a.windows);
     if let Some(p) = &a.params_out {
         plan = plan.output("--params-out", p);
     }
@@ -314,6 +352,12 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
     if let Some(g) = generators::by_name(&generator)
         .filter(|g| g.capabilities().fit == Some(generators::FitMethod::TreeGa))
     {
+        if !a.windows.is_empty() {
+            return Err(format!(
+                "--windows is for a generator with windows, not `{}`",
+                g.name()
+            ));
+        }
         return reconstruct_tree(a, g, target, start.as_deref());
     }
     if a.tree_colors.is_some() {
@@ -323,6 +367,7 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
     // --fov wins, then the photo's EXIF focal length, then the default.
     let fov_y = views.iter().map(|v| a.fov.or(v.fov)).collect();
     let masks = views.into_iter().map(|v| v.mask).collect::<Vec<_>>();
+    let windows = load_windows(a, &generator, &masks)?;
     let config = FitConfig {
         generator,
         start,
@@ -333,6 +378,7 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
             .restarts
             .unwrap_or_else(|| FitConfig::restarts_for_quality(a.quality)),
         fov_y,
+        windows,
         ..FitConfig::default()
     };
     let mut session = Session::new(config, masks.clone()).map_err(|e| e.to_string())?;
@@ -377,6 +423,71 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
         model.lod.index()
     );
     report_photo_match(&result.model, &result.views, &masks, &a.images)
+}
+
+/// `--windows`: the window labels of each view (background, façade, window, don't care) from
+/// its window mask and its object mask; an error for a generator without windows, more
+/// window masks than images, or a window mask whose size is not its view's.
+fn load_windows(
+    a: &ReconstructArgs,
+    generator: &str,
+    masks: &[Mask],
+) -> Result<Vec<Option<procfit::mask::LabelImage>>, String> {
+    use procfit::segment::windows::{LABEL_BACKGROUND, LABEL_FACADE, LABEL_WINDOW};
+    if a.windows.is_empty() {
+        return Ok(Vec::new());
+    }
+    let has_windows = generators::by_name(generator)
+        .is_some_and(|g| g.capabilities().mask_extra == generators::MaskExtra::Windows);
+    if !has_windows {
+        return Err(format!(
+            "--windows is for a generator with windows, not `{generator}` (name it with --generator)"
+        ));
+    }
+    if a.windows.len() > masks.len() {
+        return Err(format!(
+            "{} window masks for {} images: give one per image, in their order",
+            a.windows.len(),
+            masks.len()
+        ));
+    }
+    a.windows
+        .iter()
+        .zip(masks)
+        .map(|(path, mask)| {
+            let bytes = read(path)?;
+            let img = Photo::decode(&bytes, segment::WORKING_SIDE)
+                .map_err(|e| format!("{}: not a readable image ({e})", path.display()))?;
+            let (w, h) = (mask.width(), mask.height());
+            if (img.width(), img.height()) != (w, h) {
+                return Err(format!(
+                    "{}: the window mask is {}×{} at the working size but its view's mask is {w}×{h}: write it with `procfit segment` from the same photo",
+                    path.display(),
+                    img.width(),
+                    img.height()
+                ));
+            }
+            let labels = mask
+                .values()
+                .iter()
+                .zip(img.rgba().chunks_exact(4))
+                .map(|(&m, p)| {
+                    if m == Mask::DONT_CARE {
+                        procfit::mask::LabelImage::DONT_CARE
+                    } else if m < 0.5 {
+                        LABEL_BACKGROUND
+                    } else if p[0] >= 128 {
+                        LABEL_WINDOW
+                    } else {
+                        LABEL_FACADE
+                    }
+                })
+                .collect();
+            procfit::mask::LabelImage::new(w, h, labels)
+                .map(Some)
+                .map_err(|e| format!("{}: {e}", path.display()))
+        })
+        .collect()
 }
 
 /// The level of detail a fit is written at: [`Lod::High`], or the generator's
@@ -465,6 +576,23 @@ fn load_tree_labels(
     path: &Path,
     colors: Option<&str>,
 ) -> Result<procfit::mask::LabelImage, String> {
+    let (labels, note) = read_tree_labels(path, colors)?;
+    if let Some(n) = note {
+        eprintln!("procfit: {}: {n}", path.display());
+    }
+    // Implausible labels are said, not fitted into a leafless stick.
+    if let Some(problem) = procfit::tree::labels::foliage_problem(&labels) {
+        return Err(format!("{}: {problem}", path.display()));
+    }
+    Ok(labels)
+}
+
+/// [`load_tree_labels`] without its checks or messages: the labels at the file's own size,
+/// and how a photo was labelled when it was not by the colour rules.
+pub(crate) fn read_tree_labels(
+    path: &Path,
+    colors: Option<&str>,
+) -> Result<(procfit::mask::LabelImage, Option<String>), String> {
     use procfit::tree::labels;
     let thresholds = match colors {
         None => labels::ColorThresholds::default(),
@@ -474,18 +602,8 @@ fn load_tree_labels(
     };
     let (_, rgba) = read_image(path)?;
     let (w, h) = rgba.dimensions();
-    let result = labels::labels_from_image(w, h, rgba.as_raw(), &thresholds).map(|(l, note)| {
-        if let Some(n) = note {
-            eprintln!("procfit: {}: {n}", path.display());
-        }
-        l
-    });
-    let labels = result.map_err(|e| format!("{}: {e}", path.display()))?;
-    // Implausible labels are said, not fitted into a leafless stick.
-    if let Some(problem) = labels::foliage_problem(&labels) {
-        return Err(format!("{}: {problem}", path.display()));
-    }
-    Ok(labels)
+    labels::labels_from_image(w, h, rgba.as_raw(), &thresholds)
+        .map_err(|e| format!("{}: {e}", path.display()))
 }
 
 /// `procfit reconstruct --generator tree`: the tree GA on one image, progress on stderr, the
