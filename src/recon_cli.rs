@@ -422,7 +422,7 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
         result.loss,
         model.lod.index()
     );
-    report_photo_match(&result.model, &result.views, &masks, &a.images)
+    report_photo_match(&result, &masks, &a.images)
 }
 
 /// `--windows`: the window labels of each view (background, façade, window, don't care) from
@@ -499,16 +499,11 @@ fn fitted_lod(generator: &dyn generators::Generator) -> Lod {
 /// Prints how well the fitted model matches each photo (its photo-view IoU) and, when it does
 /// not, a warning saying what to try (issue 16: never a confident wrong answer).
 fn report_photo_match(
-    model: &Model,
-    views: &[procfit::camera::View],
+    result: &reconstruct::FitResult,
     masks: &[Mask],
     paths: &[PathBuf],
 ) -> Result<(), String> {
-    let mesh = model
-        .generator
-        .generate(&model.params, model.lod)
-        .map_err(|e| e.to_string())?;
-    let ious = eval::photo_view_ious(&mesh, views, masks).map_err(|e| e.to_string())?;
+    let ious = eval::result_photo_ious(result, masks).map_err(|e| e.to_string())?;
     let names: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
     let each: Vec<String> = ious
         .iter()
@@ -682,19 +677,14 @@ fn reconstruct_tree(
         fit.similarity,
         model.lod.index()
     );
-    if iou < TREE_MATCH_LEVEL {
-        eprintln!(
-            "warning: the fitted tree does not match the photo (photo-view IoU {iou:.2} < \
-             {TREE_MATCH_LEVEL:.2}): check the labels (--tree-colors, or give a label image \
-             of 0 background, 1 branch, 2 leaf), choose another kind of object, or use a photo \
-             of one tree against a plain background"
-        );
+    if let Some(w) = eval::tree_match_warning(
+        iou,
+        "--tree-colors, or give a label image of 0 background, 1 branch, 2 leaf",
+    ) {
+        eprintln!("warning: {w}");
     }
     Ok(())
 }
-
-/// Below this photo-view IoU a fitted tree is said not to match its photo.
-const TREE_MATCH_LEVEL: f64 = 0.8;
 
 /// `--lod` as a level of detail; without it, the generator's export detail ([`fitted_lod`]).
 fn lod_of(a: &ReconstructArgs, generator: &dyn generators::Generator) -> Result<Lod, String> {
