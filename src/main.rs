@@ -12,6 +12,7 @@ use std::process::ExitCode;
 mod format_cli;
 mod outputs;
 mod recon_cli;
+mod segment_cli;
 
 #[derive(Parser)]
 #[command(
@@ -70,6 +71,9 @@ enum Command {
     Reconstruct(recon_cli::ReconstructArgs),
     /// Render a generator's silhouette through a camera to a mask PNG.
     Render(recon_cli::RenderArgs),
+    /// Write the automatic mask a fit would use (and a building's windows, a tree's labels),
+    /// with its confidence, to see and correct before `reconstruct`.
+    Segment(segment_cli::SegmentArgs),
     /// IoU over 64 turntable views between a model GLB and a reference mesh (OBJ or GLB).
     Eval(recon_cli::EvalArgs),
 }
@@ -99,6 +103,7 @@ fn main() -> ExitCode {
         Command::Reconstruct(args) => recon_cli::reconstruct(&args),
         Command::Render(args) => recon_cli::render(&args),
         Command::Eval(args) => recon_cli::eval(&args),
+        Command::Segment(args) => segment_cli::segment(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -78,6 +78,11 @@ pub struct ReconstructArgs {
     /// photos (a refit keeps `--start`'s colours).
     #[arg(long)]
     default_colors: bool,
+    /// Buildings: a window mask per image, in the images' order (white = window; as
+    /// `procfit segment --generator building` writes it, at the mask's working size), so the
+    /// fit gets the floors and window columns right. Give the flag once per image.
+    #[arg(long)]
+    windows: Vec<PathBuf>,
 }
 
 /// The model `--start` names: a params JSON or a procfit GLB.
@@ -155,18 +160,44 @@ fn read_image(path: &Path) -> Result<(Vec<u8>, image::RgbaImage), String> {
 /// One view as loaded: its mask at the working size, the file's own size in pixels (upright),
 /// for a photo with EXIF its field of view, and for a photo (or a cut-out with transparency)
 /// its sRGB RGBA pixels at the mask's size, for the part colours.
-struct LoadedView {
-    mask: Mask,
-    file_size: (u32, u32),
-    fov: Option<f64>,
-    rgba: Option<Vec<u8>>,
+pub(crate) struct LoadedView {
+    /// The mask the fit uses, at the working size.
+    pub mask: Mask,
+    /// The file's own size (upright).
+    pub file_size: (u32, u32),
+    /// The field of view from the photo's EXIF, when it has one.
+    pub fov: Option<f64>,
+    /// The photo's sRGB RGBA pixels at the mask's size, for the part colours (`None` for a
+    /// grey mask image: no colours to take).
+    pub rgba: Option<Vec<u8>>,
+    /// The decoded image at the working size (the photo, or the mask image itself).
+    pub photo: Photo,
+    /// The automatic segmentation when the file is a photo (its confidence, its object mask);
+    /// `None` for a mask image or a photo with transparency.
+    pub segmentation: Option<segment::Segmentation>,
+    /// What to tell the user about the mask (automatic or given) before the fit.
+    pub warnings: Vec<String>,
+}
+
+/// In a grey mask image, this exact level is don't care, as [`Mask::to_luma8`] (and so
+/// `procfit segment`) writes the outline's band; every other level is coverage.
+const DONT_CARE_LEVEL: u8 = 128;
+
+/// A view's mask, warnings printed on stderr (see [`read_view`]).
+fn load_view(path: &Path) -> Result<LoadedView, String> {
+    let view = read_view(path)?;
+    for w in &view.warnings {
+        eprintln!("procfit: {}: {w}", path.display());
+    }
+    Ok(view)
 }
 
 /// A view's mask. The file is decoded once, straight to the working size (a large JPEG by a
 /// scaled DCT decode), so a 4000×3000 mask costs what a 512² one does: a mask image (grey and
 /// nearly binary, or with transparency) becomes soft coverage — the share of object pixels
-/// under each working pixel — and a photo is segmented automatically.
-fn load_view(path: &Path) -> Result<LoadedView, String> {
+/// under each working pixel — with grey [`DONT_CARE_LEVEL`] as don't care, and a photo is
+/// segmented automatically. Nothing is printed: the warnings are returned.
+pub(crate) fn read_view(path: &Path) -> Result<LoadedView, String> {
     let bytes = read(path)?;
     let at = |e: &dyn std::fmt::Display| format!("{}: {e}", path.display());
     let photo = Photo::decode(&bytes, segment::WORKING_SIDE)
@@ -174,42 +205,47 @@ fn load_view(path: &Path) -> Result<LoadedView, String> {
     let (w, h) = (photo.width(), photo.height());
     let file_size = photo.source_size();
     let px = photo.rgba();
-    let coverage = |v: &[u8]| {
-        Mask::new(w, h, v.iter().map(|&c| f32::from(c) / 255.0).collect()).map_err(|e| at(&e))
+    let coverage = |v: &[u8], dont_care: bool| {
+        let values = v
+            .iter()
+            .map(|&c| {
+                if dont_care && c == DONT_CARE_LEVEL {
+                    Mask::DONT_CARE
+                } else {
+                    f32::from(c) / 255.0
+                }
+            })
+            .collect();
+        Mask::new(w, h, values).map_err(|e| at(&e))
     };
-    let mut auto = false;
     let mut rgba = Some(px.to_vec());
+    let mut segmentation = None;
+    let mut warnings = Vec::new();
     let mask = if photo.has_alpha() && px.chunks_exact(4).any(|p| p[3] < 128) {
-        coverage(&px.chunks_exact(4).map(|p| p[3]).collect::<Vec<_>>())?
+        coverage(&px.chunks_exact(4).map(|p| p[3]).collect::<Vec<_>>(), false)?
     } else if px.chunks_exact(4).all(|p| p[0] == p[1] && p[1] == p[2])
         && px
             .chunks_exact(4)
-            .filter(|p| p[0] < 16 || p[0] > 239)
+            .filter(|p| p[0] < 16 || p[0] > 239 || p[0] == DONT_CARE_LEVEL)
             .count()
             >= px.len() / 4 * 95 / 100
     {
         // A grey mask image: no colours to take.
         rgba = None;
-        coverage(&px.chunks_exact(4).map(|p| p[0]).collect::<Vec<_>>())?
+        coverage(&px.chunks_exact(4).map(|p| p[0]).collect::<Vec<_>>(), true)?
     } else {
-        auto = true;
         let seg = segment::segment_auto(&photo).map_err(|e| at(&e))?;
-        for w in &seg.warnings {
-            eprintln!("procfit: {}: {w}", path.display());
-        }
-        seg.mask
+        warnings.clone_from(&seg.warnings);
+        let mask = seg.mask.clone();
+        segmentation = Some(seg);
+        mask
     };
-    if !auto {
+    if segmentation.is_none() {
         let obj: Vec<bool> = mask.values().iter().map(|&v| v >= 0.5).collect();
         // An empty or full mask is the fit's one-line error; the rest is said here.
         let area = obj.iter().filter(|&&o| o).count();
-        let said = if area == 0 || area == obj.len() {
-            Vec::new()
-        } else {
-            segment::mask_warnings(&obj, w as usize, h as usize)
-        };
-        for warning in said {
-            eprintln!("procfit: {}: {warning}", path.display());
+        if area != 0 && area != obj.len() {
+            warnings = segment::mask_warnings(&obj, w as usize, h as usize);
         }
     }
     let fov = exif_fov(&bytes, mask.width(), mask.height());
@@ -218,6 +254,9 @@ fn load_view(path: &Path) -> Result<LoadedView, String> {
         file_size,
         fov,
         rgba,
+        photo,
+        segmentation,
+        warnings,
     })
 }
 
@@ -305,6 +344,7 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
     if let Some(p) = &a.start {
         plan = plan.input(p);
     }
+    plan = plan.inputs(&a.windows);
     if let Some(p) = &a.params_out {
         plan = plan.output("--params-out", p);
     }
@@ -330,6 +370,12 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
     if let Some(g) = generators::by_name(&generator)
         .filter(|g| g.capabilities().fit == Some(generators::FitMethod::TreeGa))
     {
+        if !a.windows.is_empty() {
+            return Err(format!(
+                "--windows is for a generator with windows, not `{}`",
+                g.name()
+            ));
+        }
         return reconstruct_tree(a, g, target, start.as_deref());
     }
     if a.tree_colors.is_some() {
@@ -340,6 +386,7 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
     let fov_y = views.iter().map(|v| a.fov.or(v.fov)).collect();
     let (masks, pixels): (Vec<Mask>, Vec<Option<Vec<u8>>>) =
         views.into_iter().map(|v| (v.mask, v.rgba)).unzip();
+    let windows = load_windows(a, &generator, &masks)?;
     let config = FitConfig {
         generator,
         start,
@@ -350,6 +397,7 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
             .restarts
             .unwrap_or_else(|| FitConfig::restarts_for_quality(a.quality)),
         fov_y,
+        windows,
         ..FitConfig::default()
     };
     let mut session = Session::new(config, masks.clone()).map_err(|e| e.to_string())?;
@@ -400,7 +448,72 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
         result.loss,
         model.lod.index()
     );
-    report_photo_match(&result.model, &result.views, &masks, &a.images)
+    report_photo_match(&result, &masks, &a.images)
+}
+
+/// `--windows`: the window labels of each view (background, façade, window, don't care) from
+/// its window mask and its object mask; an error for a generator without windows, more
+/// window masks than images, or a window mask whose size is not its view's.
+fn load_windows(
+    a: &ReconstructArgs,
+    generator: &str,
+    masks: &[Mask],
+) -> Result<Vec<Option<procfit::mask::LabelImage>>, String> {
+    use procfit::segment::windows::{LABEL_BACKGROUND, LABEL_FACADE, LABEL_WINDOW};
+    if a.windows.is_empty() {
+        return Ok(Vec::new());
+    }
+    let has_windows = generators::by_name(generator)
+        .is_some_and(|g| g.capabilities().mask_extra == generators::MaskExtra::Windows);
+    if !has_windows {
+        return Err(format!(
+            "--windows is for a generator with windows, not `{generator}` (name it with --generator)"
+        ));
+    }
+    if a.windows.len() > masks.len() {
+        return Err(format!(
+            "{} window masks for {} images: give one per image, in their order",
+            a.windows.len(),
+            masks.len()
+        ));
+    }
+    a.windows
+        .iter()
+        .zip(masks)
+        .map(|(path, mask)| {
+            let bytes = read(path)?;
+            let img = Photo::decode(&bytes, segment::WORKING_SIDE)
+                .map_err(|e| format!("{}: not a readable image ({e})", path.display()))?;
+            let (w, h) = (mask.width(), mask.height());
+            if (img.width(), img.height()) != (w, h) {
+                return Err(format!(
+                    "{}: the window mask is {}×{} at the working size but its view's mask is {w}×{h}: write it with `procfit segment` from the same photo",
+                    path.display(),
+                    img.width(),
+                    img.height()
+                ));
+            }
+            let labels = mask
+                .values()
+                .iter()
+                .zip(img.rgba().chunks_exact(4))
+                .map(|(&m, p)| {
+                    if m == Mask::DONT_CARE {
+                        procfit::mask::LabelImage::DONT_CARE
+                    } else if m < 0.5 {
+                        LABEL_BACKGROUND
+                    } else if p[0] >= 128 {
+                        LABEL_WINDOW
+                    } else {
+                        LABEL_FACADE
+                    }
+                })
+                .collect();
+            procfit::mask::LabelImage::new(w, h, labels)
+                .map(Some)
+                .map_err(|e| format!("{}: {e}", path.display()))
+        })
+        .collect()
 }
 
 /// The part colours measured in the photos (the views that have one; `None` when none has),
@@ -445,16 +558,11 @@ fn fitted_lod(generator: &dyn generators::Generator) -> Lod {
 /// Prints how well the fitted model matches each photo (its photo-view IoU) and, when it does
 /// not, a warning saying what to try (issue 16: never a confident wrong answer).
 fn report_photo_match(
-    model: &Model,
-    views: &[procfit::camera::View],
+    result: &reconstruct::FitResult,
     masks: &[Mask],
     paths: &[PathBuf],
 ) -> Result<(), String> {
-    let mesh = model
-        .generator
-        .generate(&model.params, model.lod)
-        .map_err(|e| e.to_string())?;
-    let ious = eval::photo_view_ious(&mesh, views, masks).map_err(|e| e.to_string())?;
+    let ious = eval::result_photo_ious(result, masks).map_err(|e| e.to_string())?;
     let names: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
     let each: Vec<String> = ious
         .iter()
@@ -522,6 +630,23 @@ fn load_tree_labels(
     path: &Path,
     colors: Option<&str>,
 ) -> Result<procfit::mask::LabelImage, String> {
+    let (labels, note) = read_tree_labels(path, colors)?;
+    if let Some(n) = note {
+        eprintln!("procfit: {}: {n}", path.display());
+    }
+    // Implausible labels are said, not fitted into a leafless stick.
+    if let Some(problem) = procfit::tree::labels::foliage_problem(&labels) {
+        return Err(format!("{}: {problem}", path.display()));
+    }
+    Ok(labels)
+}
+
+/// [`load_tree_labels`] without its checks or messages: the labels at the file's own size,
+/// and how a photo was labelled when it was not by the colour rules.
+pub(crate) fn read_tree_labels(
+    path: &Path,
+    colors: Option<&str>,
+) -> Result<(procfit::mask::LabelImage, Option<String>), String> {
     use procfit::tree::labels;
     let thresholds = match colors {
         None => labels::ColorThresholds::default(),
@@ -531,18 +656,8 @@ fn load_tree_labels(
     };
     let (_, rgba) = read_image(path)?;
     let (w, h) = rgba.dimensions();
-    let result = labels::labels_from_image(w, h, rgba.as_raw(), &thresholds).map(|(l, note)| {
-        if let Some(n) = note {
-            eprintln!("procfit: {}: {n}", path.display());
-        }
-        l
-    });
-    let labels = result.map_err(|e| format!("{}: {e}", path.display()))?;
-    // Implausible labels are said, not fitted into a leafless stick.
-    if let Some(problem) = labels::foliage_problem(&labels) {
-        return Err(format!("{}: {problem}", path.display()));
-    }
-    Ok(labels)
+    labels::labels_from_image(w, h, rgba.as_raw(), &thresholds)
+        .map_err(|e| format!("{}: {e}", path.display()))
 }
 
 /// A fitted tree's part colours from its photo's leaf and branch pixels, printed; none for a
@@ -669,19 +784,14 @@ fn reconstruct_tree(
         fit.similarity,
         model.lod.index()
     );
-    if iou < TREE_MATCH_LEVEL {
-        eprintln!(
-            "warning: the fitted tree does not match the photo (photo-view IoU {iou:.2} < \
-             {TREE_MATCH_LEVEL:.2}): check the labels (--tree-colors, or give a label image \
-             of 0 background, 1 branch, 2 leaf), choose another kind of object, or use a photo \
-             of one tree against a plain background"
-        );
+    if let Some(w) = eval::tree_match_warning(
+        iou,
+        "--tree-colors, or give a label image of 0 background, 1 branch, 2 leaf",
+    ) {
+        eprintln!("warning: {w}");
     }
     Ok(())
 }
-
-/// Below this photo-view IoU a fitted tree is said not to match its photo.
-const TREE_MATCH_LEVEL: f64 = 0.8;
 
 /// `--lod` as a level of detail; without it, the generator's export detail ([`fitted_lod`]).
 fn lod_of(a: &ReconstructArgs, generator: &dyn generators::Generator) -> Result<Lod, String> {

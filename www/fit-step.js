@@ -8,6 +8,7 @@ import { $, client, state, specOf, fitGenerator } from './page.js';
 import { chooseGenerator } from './model-step.js';
 
 const fitMessage = $('fit-message');
+const fitMatch = $('fit-match');
 const fitter = new FitRunner({
   client,
   els: { stage: $('fit-stage'), eta: $('fit-eta'), bar: $('fit-bar'), preview: $('fit-preview'), curve: $('fit-curve'), box: $('fit-progress'), caption: $('fit-preview-caption') },
@@ -74,11 +75,39 @@ function colorNote(r) {
 }
 
 /**
+ * Says how well the fitted model matches each photo: its photo-view IoU (the model through
+ * the photo's fitted camera against the photo's mask, don't-care excluded), and, below the
+ * core's level, that it does not match and what to do (the core's sentence). Empty without
+ * numbers.
+ * @param {{ photo_ious?: number[], match_level?: number, match_warning?: string | null }} r
+ */
+export function showMatch(r) {
+  const ious = r.photo_ious ?? [];
+  if (!ious.length) {
+    say(fitMatch, '');
+    fitMatch.dataset.match = '';
+    return;
+  }
+  const each = ious.map((v, i) => `${ious.length > 1 ? `photo ${i + 1} ` : ''}${v.toFixed(2)}`).join(', ');
+  const level = typeof r.match_level === 'number' ? r.match_level.toFixed(2) : '';
+  const numbers = `How well the fitted model matches ${ious.length > 1 ? 'each photo' : 'the photo'} (outline overlap, 1 = exact): ${each}.`;
+  if (r.match_warning) {
+    const why = r.match_warning.charAt(0).toUpperCase() + r.match_warning.slice(1);
+    say(fitMatch, `${numbers} ${why}.`, 'warn');
+    fitMatch.dataset.match = 'poor';
+  } else {
+    say(fitMatch, `${numbers} That is a match (${level} or better).`, 'info');
+    fitMatch.dataset.match = 'good';
+  }
+}
+
+/**
  * Runs a fit and hands its model to the editor; `start`: parameters to start from.
  * @param {{ generator: string, start?: number[] | null }} o
  */
 async function runFit({ generator, start = null }) {
   say(fitMessage, '');
+  showMatch({});
   $('fit-cancel').hidden = false;
   $('fit-start').disabled = true;
   $('refit').disabled = true;
@@ -110,6 +139,7 @@ async function runFit({ generator, start = null }) {
           : `${start ? 'Refitted' : 'Fitted'} in ${out.seconds.toFixed(1)} s (${r.evaluations.toLocaleString('en')} evaluations)${similarityChange(r)}. Edit the model below; Reset returns to the fitted values.${colorNote(r)}`,
       'info',
     );
+    showMatch(r);
     outcome = out.cancelled ? 'cancelled' : 'done';
   } catch (err) {
     const hint = /same size/.test(err.message)

@@ -59,7 +59,8 @@ export const REQUESTS = Object.freeze({
   PHOTO_FOCAL: 'photo/focal',
   // { fitId, generator ('auto' or a name), seed, quality, start?: number[],
   //   masks: [{ width, height, codes, windows?: ArrayBuffer | null, focal_35mm?: number | null }] }
-  // → { cancelled, result: { generator, params, lod, seed, loss, evaluations, cameras } }
+  // → { cancelled, result: { generator, params, lod, seed, loss, evaluations, cameras,
+  //   photo_ious: number[] (one a photo), match_level, match_warning?: string } }
   // `start`: the named generator's parameters to start from ("Refit from here"); a mask's
   // `focal_35mm` (from PHOTO_FOCAL) sets that view's field of view, else the default is used;
   // a mask's `windows` (labels as MASK_WINDOWS_* give them) adds the window term of a building.
@@ -75,7 +76,8 @@ export const REQUESTS = Object.freeze({
   TREE_LABELS: 'tree/labels',
   // { fitId, seed, quality, width, height, rgba, codes, start?: number[] } → { cancelled,
   // result: { generator (the tree generator's name), params, lod, seed, similarity, start_similarity, evaluations,
-  // cameras } } (`start_similarity`: the start's, undefined without one).
+  // cameras, photo_ious: [number], match_level, match_warning?: string } } (`start_similarity`:
+  // the start's, undefined without one; `match_warning`: a sentence when below the level).
   // `start`: the tree generator's parameters to refit from ("Refit from here"): the fit keeps
   // its `seed` parameter and never returns a tree less similar to the photo. On the way: event
   // 'progress'
@@ -90,7 +92,7 @@ export const REQUESTS = Object.freeze({
  * 'sys/ready' (`protocol`), and the page refuses a worker that speaks another one (an old
  * worker.js from a cache, say) with a message that says to reload.
  */
-export const PROTOCOL_VERSION = 9;
+export const PROTOCOL_VERSION = 10;
 
 /**
  * An error as it crosses the protocol: `panic` when a trap poisoned the worker.

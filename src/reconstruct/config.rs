@@ -77,6 +77,10 @@ pub struct FitConfig {
     pub windows: Vec<Option<LabelImage>>,
     /// Weight of the window term relative to the silhouette MSE.
     pub window_weight: f64,
+    /// Whether small things in a mask that are not the object (a spoon, a tea bag's string
+    /// and tag: thin spurs and small separate pieces, [`super::extras`]) are made don't care
+    /// before the fit. On by default.
+    pub ignore_extras: bool,
 }
 
 impl Default for FitConfig {
@@ -99,6 +103,7 @@ impl Default for FitConfig {
             start: None,
             windows: Vec::new(),
             window_weight: DEFAULT_WINDOW_WEIGHT,
+            ignore_extras: true,
         }
     }
 }

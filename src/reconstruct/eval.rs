@@ -10,6 +10,7 @@
 
 use super::FitError;
 use super::objective::render_coverage;
+use super::session::FitResult;
 use crate::camera::{View, ViewParams};
 use crate::generators::Mesh;
 use crate::loss;
@@ -153,6 +154,36 @@ pub fn photo_match_warning(ious: &[f64], names: &[String]) -> Option<String> {
         format!(
             "the model does not match {} (below {PHOTO_MATCH_LEVEL:.2}): check the mask (it should hold the object and nothing else), choose another kind of object, or add a photo from another side",
             poor.join(", ")
+        )
+    })
+}
+
+/// [`photo_view_ious`] of a fit's result: its model, at the fit's level of detail, through each
+/// fitted view against that view's mask (the masks the fit was given, in order). What the CLI
+/// prints and the page shows after a fit.
+pub fn result_photo_ious(result: &FitResult, masks: &[Mask]) -> Result<Vec<f64>, FitError> {
+    let model = &result.model;
+    let mesh = model
+        .generator
+        .generate(&model.params, model.lod)
+        .map_err(|e| FitError(e.to_string()))?;
+    photo_view_ious(&mesh, &result.views, masks)
+}
+
+/// Below this photo-view IoU (the tree pixels' silhouette IoU through the photo's camera) a
+/// fitted tree is said not to match its photo: a tree's outline is ragged, so its level is
+/// lower than [`PHOTO_MATCH_LEVEL`].
+pub const TREE_MATCH_LEVEL: f64 = 0.8;
+
+/// The one-line verdict on a fitted tree's photo-view IoU: `None` at [`TREE_MATCH_LEVEL`] or
+/// better, else what to try; `labels_hint` says how the labels are corrected where this is
+/// shown (a CLI flag, a page control).
+pub fn tree_match_warning(iou: f64, labels_hint: &str) -> Option<String> {
+    (iou < TREE_MATCH_LEVEL).then(|| {
+        format!(
+            "the fitted tree does not match the photo (photo-view IoU {iou:.2} < \
+             {TREE_MATCH_LEVEL:.2}): check the labels ({labels_hint}), choose another kind of \
+             object, or use a photo of one tree against a plain background"
         )
     })
 }

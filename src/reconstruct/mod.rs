@@ -12,9 +12,12 @@
 //! - [`windows`]: the window term of a building fit (window labels per view), and
 //!   `layout_search`, the building layout sweep it drives at the hand-over.
 //! - [`eval`]: the paper's IoU over 64 turntable views.
+//! - [`extras`]: small things in a mask that are not the object (a spoon, a tea bag's tag),
+//!   made don't care before the fit ([`FitConfig::ignore_extras`]).
 
 pub mod config;
 pub mod eval;
+pub mod extras;
 mod handover;
 mod layout_search;
 pub mod objective;

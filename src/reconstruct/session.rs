@@ -91,6 +91,12 @@ impl Session {
     /// Errors on an unknown or non-differentiable generator, no masks or too many, masks of
     /// different sizes, empty or all-object masks, too small images, and bad settings.
     pub fn new(config: FitConfig, masks: Vec<Mask>) -> Result<Session, FitError> {
+        // Small things that are not the object are ignored by every stage (issue 16).
+        let masks = if config.ignore_extras {
+            masks.iter().map(super::extras::without_extras).collect()
+        } else {
+            masks
+        };
         let plan = config.plan(&masks)?;
         let mut runs = Vec::with_capacity(config.restarts);
         for k in 0..config.restarts {

@@ -5,14 +5,15 @@
 
 use super::js;
 use crate::mask::{LabelImage, Mask};
-use crate::reconstruct::{FitConfig, Session, export_camera};
+use crate::reconstruct::{FitConfig, Session, eval, export_camera};
 use wasm_bindgen::prelude::*;
 
 /// A fit in progress.
 #[wasm_bindgen]
 pub struct FitSession {
     session: Session,
-    /// The masks fitted (for the part colours' don't-care and object pixels).
+    /// The masks the fit was given: for the part colours' object pixels and to say how well its
+    /// result matches each photo.
     masks: Vec<Mask>,
     /// The last progress's silhouette preview (view 0), as 0..255 coverage.
     preview: Option<(u32, u32, Vec<u8>)>,
@@ -48,6 +49,13 @@ struct ResultOut {
     evaluations: usize,
     /// One camera per photo, [`super::CAMERA_FLOATS`] numbers each, for `generateGlb`.
     cameras: Vec<f32>,
+    /// Each photo's photo-view IoU: the model through its fitted camera against the photo's
+    /// mask, don't-care excluded (`eval::result_photo_ious`, what the CLI prints).
+    photo_ious: Vec<f64>,
+    /// The level below which a photo is said not to be matched (`eval::PHOTO_MATCH_LEVEL`).
+    match_level: f64,
+    /// What is wrong and what to try when a photo is below the level (`None` otherwise).
+    match_warning: Option<String>,
 }
 
 /// Masks from 8-bit codes (object 255, background 0, don't care 128, anything else a soft
@@ -276,7 +284,11 @@ impl FitSession {
             .iter()
             .flat_map(|v| export_camera(v, None).to_floats())
             .collect();
+        let photo_ious = eval::result_photo_ious(&r, &self.masks).map_err(js)?;
         let out = ResultOut {
+            match_warning: eval::photo_match_warning(&photo_ious, &[]),
+            match_level: eval::PHOTO_MATCH_LEVEL,
+            photo_ious,
             generator: r.model.generator.name(),
             params: r.model.params.clone(),
             lod: r.model.lod as u8,

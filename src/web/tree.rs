@@ -30,7 +30,9 @@
 //! const r = fit.result(); // { generator: the tree generator's name, params, lod, seed, similarity,
 //! //                          start_similarity (undefined without a start), evaluations,
 //! //                          cameras: Float32Array-able number[18] (yfov, aspect, 16 floats
-//! //                          camera-to-world, column-major): the photo's camera for generateGlb }
+//! //                          camera-to-world, column-major): the photo's camera for generateGlb,
+//! //                          photo_ious: [the photo-view IoU], match_level, match_warning
+//! //                          (a sentence when below the level, else undefined) }
 //! ```
 //!
 //! Deterministic for a seed. The preview is in the fit's square frame (the photo's tree
@@ -76,6 +78,13 @@ struct ResultOut {
     start_similarity: Option<f64>,
     evaluations: usize,
     cameras: Vec<f32>,
+    /// The photo's photo-view IoU (one entry): the tree pixels' silhouette IoU through the
+    /// photo's camera, what the CLI prints.
+    photo_ious: Vec<f64>,
+    /// The level below which the tree is said not to match (`eval::TREE_MATCH_LEVEL`).
+    match_level: f64,
+    /// What is wrong and what to try when below the level (`None` otherwise).
+    match_warning: Option<String>,
 }
 
 impl TreeFitSession {
@@ -254,7 +263,14 @@ impl TreeFitSession {
         let cameras = crate::reconstruct::export_camera(&view, None)
             .to_floats()
             .to_vec();
+        let iou = self.session.silhouette_iou().map_err(js)?;
         let out = ResultOut {
+            photo_ious: vec![iou],
+            match_level: crate::reconstruct::eval::TREE_MATCH_LEVEL,
+            match_warning: crate::reconstruct::eval::tree_match_warning(
+                iou,
+                "“Adjust the colours” in the mask step",
+            ),
             // The tree GA fits the tree generator and no other.
             generator: crate::generators::tree::TreeGenerator.name(),
             params: fit.params,

@@ -115,6 +115,8 @@ test('the tree fit runs with progress and puts its tree in the viewer', async ()
   const seconds = (Date.now() - t0) / 1000;
   assert.equal(await page.evaluate(() => document.body.dataset.fitted), 'done', await messageOf('fit-message'));
   assert.match(await messageOf('fit-message'), /Fitted in/);
+  // Issue 16: the tree's photo-view IoU is said after its fit, as for every generator.
+  assert.match(await messageOf('fit-match'), /How well the fitted model matches the photo \(outline overlap, 1 = exact\): [01]\.\d\d\./);
   assert.ok(stages.includes(1), `stages seen: ${[...new Set(stages)]}`);
   assert.match(await page.textContent('#fit-preview-caption'), /Best tree so far/);
   await settled();

@@ -1,0 +1,92 @@
+// Honest results (issue 16): after a fit the page says how well the fitted model matches each
+// photo (its photo-view IoU, computed by the core as the CLI prints it) and, when a photo is
+// below the stated level, says plainly that the model does not match and what to do. A cup
+// sample fitted as a dish is a match; a flat ring fitted as a dish cannot be, whatever
+// the fit does, so the page must say so.
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { startServer, launchBrowser, openPage, screenshot } from './harness.mjs';
+
+let server;
+let browser;
+let page;
+
+before(async () => {
+  server = await startServer();
+  browser = await launchBrowser();
+  ({ page } = await openPage(browser.context, server.url));
+  await page.waitForSelector('body[data-ready="true"]', { timeout: 90000 });
+});
+
+after(async () => {
+  await browser?.close();
+  server?.stop();
+});
+
+const messageOf = (id) => page.evaluate((id) => {
+  const m = document.getElementById(id);
+  return m.hidden ? '' : m.textContent;
+}, id);
+
+/** Fits the photos as they are with the quick effort; resolves when the page is at rest. */
+async function quickFit() {
+  await page.evaluate(() => delete document.body.dataset.fitted);
+  await page.selectOption('#fit-quality', '0.25');
+  await page.waitForSelector('#fit-start:not([disabled])', { timeout: 60000 });
+  await page.click('#fit-start');
+  await page.waitForFunction(() => document.body.dataset.fitted, null, { timeout: 180000 });
+  assert.equal(await page.evaluate(() => document.body.dataset.fitted), 'done', await messageOf('fit-message'));
+}
+
+/** The numbers in the match message. */
+const numbersOf = (text) => [...text.matchAll(/\b[01]\.\d\d\b/g)].map((m) => Number(m[0]));
+
+const waitForMask = () =>
+  page.waitForFunction(() => /Object found|check the mask/.test(document.getElementById('mask-state').textContent), null, { timeout: 60000 });
+
+test('a cup fitted as a dish is said to match its photo, with the number', async () => {
+  await page.click('button[data-sample="mug"]');
+  await waitForMask();
+  await page.check('#gen-dish');
+  assert.equal(await messageOf('fit-match'), '', 'nothing is said before a fit');
+  await quickFit();
+  const said = await messageOf('fit-match');
+  assert.match(said, /How well the fitted model matches the photo/);
+  const [iou] = numbersOf(said);
+  assert.ok(iou >= 0.85 && iou <= 1, `photo-view IoU ${iou} in: ${said}`);
+  assert.equal(await page.getAttribute('#fit-match', 'data-match'), 'good', said);
+  assert.doesNotMatch(said, /does not match/);
+  await screenshot(page, '15-match-good');
+  await page.click('#thumbs li:last-child .remove');
+});
+
+test('an object the dish cannot be is said not to match, with what to do', async () => {
+  // A flat ring (a quoit) seen face on, dark on a light wall: a dish's outline has no hole
+  // this large, so no cup, bowl or glass matches it, whatever the fit does.
+  const png = await page.evaluate(async () => {
+    const c = new OffscreenCanvas(640, 480);
+    const ctx = c.getContext('2d');
+    ctx.fillStyle = '#e8e4dc';
+    ctx.fillRect(0, 0, 640, 480);
+    ctx.fillStyle = '#3a3f66';
+    ctx.beginPath();
+    ctx.arc(320, 240, 170, 0, 2 * Math.PI);
+    ctx.arc(320, 240, 115, 0, 2 * Math.PI, true);
+    ctx.fill();
+    const blob = await c.convertToBlob({ type: 'image/png' });
+    return [...new Uint8Array(await blob.arrayBuffer())];
+  });
+  await page.setInputFiles('#file', { name: 'ring.png', mimeType: 'image/png', buffer: Buffer.from(png) });
+  await waitForMask();
+  await page.check('#gen-dish');
+  await quickFit();
+  const said = await messageOf('fit-match');
+  const [iou] = numbersOf(said);
+  assert.ok(iou < 0.85, `photo-view IoU ${iou} in: ${said}`);
+  assert.equal(await page.getAttribute('#fit-match', 'data-match'), 'poor', said);
+  assert.match(said, /does not match/);
+  assert.match(said, /check the mask/);
+  assert.match(said, /another kind of object/);
+  assert.equal(await page.getAttribute('#fit-match', 'data-kind'), 'warn');
+  await screenshot(page, '15-match-poor');
+});
