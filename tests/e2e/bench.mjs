@@ -5,7 +5,9 @@
 // round trip, GLTFLoader parse and the wait for the frame.
 //
 // Usage (after `make wasm`): node tests/e2e/bench.mjs   (or `make bench-page`)
-import { startServer, launchBrowser, openPage } from './harness.mjs';
+import { existsSync } from 'node:fs';
+import { join } from 'node:path';
+import { startServer, launchBrowser, openPage, firstLoad, ROOT } from './harness.mjs';
 
 const MOVES = 15;
 const median = (xs) => {
@@ -138,6 +140,20 @@ try {
   console.log('| detail | triangles | moves | latency | queued | worker | round trip | parse | frame |');
   console.log('|---|---:|---:|---:|---:|---:|---:|---:|---:|');
   for (const r of rows) console.log(r);
+  // The first load as a visitor gets it: from dist/ (minified, precompressed), when built.
+  if (existsSync(join(ROOT, 'dist', 'index.html'))) {
+    const dist = await startServer({ root: join(ROOT, 'dist'), isolation: true });
+    try {
+      const { files, close } = await firstLoad(dist.url);
+      await close();
+      const sum = (k) => files.reduce((s, f) => s + f[k], 0);
+      console.log(`\nFirst load from dist/ (until the first model is drawn): ${sum('transferred').toLocaleString('en')} bytes transferred, ${sum('decoded').toLocaleString('en')} decoded, ${files.length} requests (limit 2,000,000 transferred: tests/e2e/weight.test.mjs)`);
+    } finally {
+      dist.stop();
+    }
+  } else {
+    console.log('\nFirst load: dist/ not built (`make dist`), not measured');
+  }
 } finally {
   await browser.close();
   server.stop();

@@ -60,6 +60,44 @@ export async function launchBrowser() {
   };
 }
 
+/**
+ * Loads `url` in a fresh browser until the first model is drawn: resolves with the requests'
+ * { url, transferred, decoded }, every console warning or error of the page and its workers, and
+ * `close` (the browser). The weight test asserts on it; the page bench prints it.
+ */
+export async function firstLoad(url) {
+  const browser = await launchBrowser();
+  const files = [];
+  const noise = [];
+  browser.context.on('requestfinished', async (request) => {
+    const response = await request.response();
+    const sizes = await request.sizes();
+    const body = response ? await response.body().catch(() => Buffer.alloc(0)) : Buffer.alloc(0);
+    files.push({
+      url: request.url(),
+      transferred: sizes.responseBodySize + sizes.responseHeadersSize,
+      decoded: body.length,
+    });
+  });
+  const page = await browser.context.newPage();
+  const listen = (where) => (m) => {
+    // Headless Chromium's software GL driver reports its own performance notes ("GL Driver
+    // Message … GPU stall due to ReadPixels") as console warnings; they are the driver's, not
+    // the page's, and a hardware GPU prints none.
+    if (/^\[\.WebGL-[0-9a-fx]+\]GL Driver Message/.test(m.text())) return;
+    if (m.type() === 'warning' || m.type() === 'error') noise.push(`${where} ${m.type()}: ${m.text()}`);
+  };
+  page.on('console', listen('page'));
+  page.on('worker', (w) => w.on('console', listen(`worker ${w.url()}`)));
+  page.on('pageerror', (e) => noise.push(`page error: ${e}`));
+  await page.goto(url);
+  await page.waitForSelector('body[data-ready="true"]', { timeout: 120000 });
+  await page.evaluate(() => window.procfit.editor.settled());
+  // Let the last responses' sizes arrive.
+  await page.waitForTimeout(500);
+  return { files, noise, close: () => browser.close() };
+}
+
 /** Opens a page and records its console errors, page errors and requests. */
 export async function openPage(context, url) {
   const page = await context.newPage();
