@@ -770,7 +770,111 @@ impl Builder<'_> {
 }
 
 /// Builds the skeleton (branch graph and leaf frames) for validated parameters.
+///
+/// The fit evaluates trees at [`Lod::Low`], where leaves are merged into fewer, larger cards
+/// that grow from their bases, so the coarse crown is 5–12 % wider and taller than the same
+/// leaves drawn one by one. The finer levels (what is exported and shown) move their leaf cards
+/// so that their crown's box is the coarse one, the crown that was matched to the photo: the
+/// crown keeps its size at every level of detail, and [`Lod::Low`]'s geometry (the GA's) is
+/// unchanged.
 fn build_skeleton(params: &[f64], lod: Lod) -> Skeleton {
+    let mut sk = grow_skeleton(params, lod);
+    if lod != Lod::Low && !sk.leaves.is_empty() {
+        let fitted = grow_skeleton(params, Lod::Low);
+        if let Some(target) = leaves_box(&fitted) {
+            fit_leaves_to(&mut sk, target);
+        }
+    }
+    sk
+}
+
+/// Corner bounding box of a leaf card attached at `pos`, along `dir`, facing `normal`.
+fn card_box(pos: Vec3, dir: Vec3, normal: Vec3, dims: Vec2) -> (Vec3, Vec3) {
+    let side = dir.cross(normal) * (0.5 * dims.y);
+    let tip = dir * dims.x;
+    [pos - side, pos + side, pos + side + tip, pos - side + tip]
+        .into_iter()
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), c| {
+            (lo.min(c), hi.max(c))
+        })
+}
+
+/// The bounding box of a skeleton's leaf cards, if it has any.
+pub fn leaves_box(sk: &Skeleton) -> Option<(Vec3, Vec3)> {
+    let b = sk
+        .leaves
+        .iter()
+        .map(|&(p, d, n)| card_box(p, d, n, sk.leaf_dims))
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), (a, b)| {
+            (lo.min(a), hi.max(b))
+        });
+    (b.0.is_finite() && b.1.is_finite()).then_some(b)
+}
+
+/// Moves the leaf cards (their centres scaled and shifted per axis about the leaves' centre) so
+/// that their bounding box is `target`.
+fn fit_leaves_to(sk: &mut Skeleton, target: (Vec3, Vec3)) {
+    let boxes: Vec<(Vec3, Vec3)> = sk
+        .leaves
+        .iter()
+        .map(|&(p, d, n)| card_box(p, d, n, sk.leaf_dims))
+        .collect();
+    if boxes.is_empty() {
+        return;
+    }
+    let centres: Vec<Vec3> = boxes.iter().map(|&(lo, hi)| (lo + hi) * 0.5).collect();
+    let halves: Vec<Vec3> = boxes.iter().map(|&(lo, hi)| (hi - lo) * 0.5).collect();
+    let mean = centres.iter().sum::<Vec3>() / centres.len() as f32;
+    let mut scale = [1.0f32; 3];
+    let mut shift = [0.0f32; 3];
+    for axis in 0..3 {
+        let d: Vec<f32> = centres.iter().map(|c| c[axis] - mean[axis]).collect();
+        let h: Vec<f32> = halves.iter().map(|v| v[axis]).collect();
+        // The extent at scale k: max(k·d + h) − min(k·d − h), piecewise linear and
+        // non-decreasing in k ≥ 0; Newton steps from k = 1 land on the right piece.
+        let extent = |k: f32| {
+            let (mut hi, mut lo) = (f32::NEG_INFINITY, f32::INFINITY);
+            let (mut dhi, mut dlo) = (0.0, 0.0);
+            for (&di, &hi_i) in d.iter().zip(&h) {
+                if k * di + hi_i > hi {
+                    hi = k * di + hi_i;
+                    dhi = di;
+                }
+                if k * di - hi_i < lo {
+                    lo = k * di - hi_i;
+                    dlo = di;
+                }
+            }
+            (hi, lo, dhi - dlo)
+        };
+        let want = target.1[axis] - target.0[axis];
+        let mut k = 1.0f32;
+        for _ in 0..8 {
+            let (hi, lo, slope) = extent(k);
+            if slope <= 1e-9 {
+                break;
+            }
+            let next = (k - (hi - lo - want) / slope).clamp(0.0, 2.0);
+            if (next - k).abs() < 1e-6 {
+                k = next;
+                break;
+            }
+            k = next;
+        }
+        let (hi, lo, _) = extent(k);
+        scale[axis] = k;
+        // Centre the fitted extent on the target's.
+        shift[axis] = 0.5 * (target.0[axis] + target.1[axis]) - (mean[axis] + 0.5 * (hi + lo));
+    }
+    let (scale, shift) = (Vec3::from_array(scale), Vec3::from_array(shift));
+    for (leaf, &c) in sk.leaves.iter_mut().zip(&centres) {
+        let moved = mean + (c - mean) * scale + shift;
+        leaf.0 += moved - c;
+    }
+}
+
+/// Grows the skeleton at one level of detail, leaves as that level draws them.
+fn grow_skeleton(params: &[f64], lod: Lod) -> Skeleton {
     let p = Params::new(params);
     let d = detail(lod);
     let seed = (params[idx::SEED] as u64).wrapping_mul(0x2545_F491_4F6C_DD1D) ^ 0x7472_6565;
