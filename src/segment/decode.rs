@@ -248,8 +248,17 @@ fn decode_jpeg_scaled(bytes: &[u8], working_side: u32) -> Scaled {
         return Scaled::NotApplicable;
     }
     dec.set_max_decoding_buffer_size(4 * MAX_PIXELS as usize + (64 << 20));
-    let Ok(pixels) = dec.decode() else {
-        return Scaled::NotApplicable;
+    let pixels = match dec.decode() {
+        Ok(pixels) => pixels,
+        // Corrupt or cut-off data: the full decoder would fill what it cannot read with grey
+        // and call it a photo, after decoding every pixel at full scale (an 860-byte file
+        // claiming 11552×4120 took 12 s and 170 MB that way, found by the `mask_image`
+        // fuzzer): refuse it here, as the error it is.
+        Err(e @ (jpeg_decoder::Error::Format(_) | jpeg_decoder::Error::Io(_))) => {
+            return Scaled::Refused(SegmentError(format!("cannot decode the image: {e}")));
+        }
+        // A feature `jpeg-decoder` lacks (arithmetic coding, 12-bit…): the full decoder.
+        Err(_) => return Scaled::NotApplicable,
     };
     let ch = match info.pixel_format {
         jpeg_decoder::PixelFormat::L8 => 1,
@@ -447,6 +456,30 @@ pub fn area_resample(src: &[u8], w: u32, h: u32, ch: usize, tw: u32, th: u32) ->
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Corrupt JPEGs whose headers claim tens of megapixels, found by the fuzzers: an error,
+    /// not a grey photo decoded at full scale.
+    #[test]
+    fn corrupt_large_jpegs_are_refused_not_filled_with_grey() {
+        for bytes in [
+            &include_bytes!(
+                "../../fuzz/regressions/mask_image/corrupt-jpeg-claiming-11552x4120-decoded-in-full"
+            )[..],
+            &include_bytes!(
+                "../../fuzz/regressions/decode_photo/corrupt-jpeg-claiming-2653x8510-decoded-in-full"
+            )[..],
+        ] {
+            for side in [64, 128, 512] {
+                let r = Photo::decode(bytes, side);
+                assert!(
+                    r.as_ref()
+                        .is_err_and(|e| e.0.starts_with("cannot decode the image")),
+                    "{:?}",
+                    r.map(|p| p.source_size())
+                );
+            }
+        }
+    }
 
     #[test]
     fn area_resample_averages_exactly() {
