@@ -818,6 +818,18 @@ impl Generator for Dish {
     fn name(&self) -> &'static str {
         "dish"
     }
+    /// How much the handle is pinched: its middle closer to the wall than its ends (mean sweep
+    /// radius of the four end steps minus that of the four middle ones, if positive). Real
+    /// handles bulge outwards or are round; a pinched one is what a round handle turned towards
+    /// or away from the camera looks like when fitted side-on, the wrong half of the ambiguity
+    /// (the fit's choice between tied restarts, measured in `src/reconstruct/session.rs`).
+    fn tie_prior(&self, params: &[f64]) -> f64 {
+        if params.len() < N_PARAMS || params[P_HAS_HANDLE] <= 0.5 {
+            return 0.0;
+        }
+        let mean = |ks: [usize; 4]| ks.iter().map(|&k| params[P_SWEEP + k]).sum::<f64>() / 4.0;
+        (mean([0, 1, HANDLE_STEPS - 2, HANDLE_STEPS - 1]) - mean([8, 9, 10, 11])).max(0.0)
+    }
     fn label(&self) -> &'static str {
         "Dish (cup, mug, bowl, plate, glass, vase)"
     }

@@ -379,6 +379,11 @@ pub trait Vjp: Send + Sync {
     fn vjp(&self, d_positions: &[Vec3], d_params: &mut [f64]) -> Result<(), GenError>;
 }
 
+/// Final losses within this ratio of the lowest count as a tie for [`Generator::tie_prior`]:
+/// the silhouette cannot tell them apart (restarts of one fit end within a few per cent of
+/// each other when they found the same shape).
+pub const TIE_TOLERANCE: f64 = 0.06;
+
 /// A procedural generator.
 pub trait Generator: Send + Sync {
     /// Stable machine name (`dish`, `building`, `tree`).
@@ -405,6 +410,15 @@ pub trait Generator: Send + Sync {
     ) -> Result<(Mesh, Box<dyn Vjp>), GenError> {
         let _ = (params, lod);
         Err(GenError::NotDifferentiable(self.name()))
+    }
+    /// How unlike a real object `params` look, for breaking ties between fits whose silhouettes
+    /// match alike (one photo often cannot tell two shapes apart: a mug's handle turned towards
+    /// the camera and a shorter one seen side-on). Never part of the loss: among restarts whose
+    /// final losses tie ([`TIE_TOLERANCE`]), the fit keeps the lowest. 0 (no preference) by
+    /// default.
+    fn tie_prior(&self, params: &[f64]) -> f64 {
+        let _ = params;
+        0.0
     }
     /// A penalty that keeps shapes sane, and its gradient (same length as `params`). Zero by
     /// default.

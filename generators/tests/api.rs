@@ -24,6 +24,23 @@ fn registry_lists_dish_and_building_by_name() {
     assert!(by_name("teapot").is_none());
 }
 
+/// The tie-break prior is a finite, non-negative number on every preset and seed (0 for a
+/// generator with no preference).
+#[test]
+fn tie_prior_is_finite_and_non_negative() {
+    for g in all() {
+        for (name, x) in g
+            .presets()
+            .into_iter()
+            .map(|p| (p.name.to_owned(), p.values))
+            .chain(g.seeds().into_iter().map(|s| ("seed".to_owned(), s)))
+        {
+            let v = g.tie_prior(&x);
+            assert!(v.is_finite() && v >= 0.0, "{} {name}: {v}", g.name());
+        }
+    }
+}
+
 #[test]
 fn specs_presets_and_seeds_are_well_formed() {
     for g in all() {

@@ -593,3 +593,24 @@ fn mug_body_is_smooth_shaded_and_caps_are_flat() {
 fn range_corners_give_valid_meshes() {
     check_range_corners(&Dish);
 }
+
+/// The tie-break prior: no preset's handle (round, ear, D, small) is pinched, a handle whose
+/// middle is closer to the wall than its ends (what a turned round handle fitted side-on looks
+/// like) is, by how much, and a handleless dish has no preference.
+#[test]
+fn tie_prior_marks_pinched_handles_only() {
+    for p in Dish.presets() {
+        let v = Dish.tie_prior(&p.values);
+        assert!(v <= 0.01, "{}: {v}", p.name);
+    }
+    let mut x = Dish.preset("mug").unwrap().values;
+    for k in 0..dish::HANDLE_STEPS {
+        let s = k as f64 / (dish::HANDLE_STEPS - 1) as f64 - 0.5;
+        // 0.3 at the ends, 0.2 in the middle.
+        x[dish::P_SWEEP + k] = 0.2 + 0.4 * s * s;
+    }
+    let pinched = Dish.tie_prior(&x);
+    assert!((0.07..0.1).contains(&pinched), "{pinched}");
+    x[dish::P_HAS_HANDLE] = 0.0;
+    assert_eq!(Dish.tie_prior(&x), 0.0);
+}

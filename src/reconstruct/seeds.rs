@@ -20,13 +20,13 @@ const PITCHES: [f64; 3] = [0.15, 0.45, 0.8];
 /// Yaw turns of the seeds whose shape is not turn-symmetric (radians, about the side-on
 /// guess). One silhouette barely tells a mug's handle turned 35° towards the camera from a
 /// shorter one seen side-on, and neither Adam nor the memetic steps cross from one to the
-/// other, so stage 1 starts from both. Which of the two stage 1 keeps is still a coin toss when
-/// the losses tie: the wrong one is a handle pinched in the middle (radii smaller there than at
-/// its ends, a turned round handle foreshortened). A prior against such pinches in the dish's
-/// regulariser, tried and not kept: the measured mug from 12 random cameras went from mean
-/// IoU-64 0.934 (min 0.764) to 0.956 (min 0.875), but the random own-generator dishes, whose
-/// handles may be pinched, lost up to 0.06 (case 7 0.981 → 0.917) and the measured mug's side
-/// view 0.990 → 0.978.
+/// other, so stage 1 starts from both. Which of the two a run keeps is a coin toss when the
+/// losses tie: the wrong one is a handle pinched in the middle (radii smaller there than at its
+/// ends, a turned round handle foreshortened). The restarts settle it ([`super::session`]'s
+/// `pick`, by `Generator::tie_prior`). The same measure as a prior in the loss was tried and not
+/// kept: the measured mug from 12 random cameras went from mean IoU-64 0.934 (min 0.764) to
+/// 0.956 (min 0.875), but random own-generator dishes, whose handles may be pinched, lost up to
+/// 0.06 (case 7 0.981 → 0.917).
 const YAW_TURNS: [f64; 3] = [0.0, -0.6, 0.6];
 
 /// Whether a mesh looks alike from every side, as far as its extent tells: equal widths along

@@ -21,6 +21,7 @@ use super::FitError;
 use super::config::FitConfig;
 use super::run::Run;
 use crate::camera::{View, ViewParams};
+use crate::generators::TIE_TOLERANCE;
 use crate::mask::Mask;
 use crate::model::Model;
 
@@ -77,8 +78,37 @@ pub struct FitResult {
 pub struct Session {
     config: FitConfig,
     runs: Vec<Run>,
-    /// The best finished run: its index, its result and its last progress.
+    /// Each finished run's result and last progress.
+    finished: Vec<Option<(FitResult, Progress)>>,
+    /// The best finished run ([`pick`]): its index, its result and its last progress.
     best: Option<(usize, FitResult, Progress)>,
+}
+
+/// The run a fit keeps among the finished ones: the lowest final loss, except that among the
+/// runs whose losses tie with it (within [`TIE_TOLERANCE`]) the one whose shape is most like a
+/// real object ([`Generator::tie_prior`](crate::generators::Generator::tie_prior)) wins, then the
+/// lowest loss, then the lower index. One photo of a mug cannot tell a handle turned towards the
+/// camera from a shorter one seen side-on, and the restarts find both with losses a few per cent
+/// apart: measured on the measured mug from 12 random cameras (quality 1), mean IoU-64 0.934 →
+/// 0.961, lowest 0.764 → 0.895 (one side view, `measured_mug_from_obj_reconstructs`, went
+/// 0.990 → 0.974); every own-generator dish of `tests/reconstruct.rs` is unchanged.
+fn pick(finished: &[Option<(FitResult, Progress)>]) -> Option<usize> {
+    let done = || {
+        finished
+            .iter()
+            .enumerate()
+            .filter_map(|(k, f)| f.as_ref().map(|(r, _)| (k, r)))
+    };
+    let lowest = done().map(|(_, r)| r.loss).fold(f64::INFINITY, f64::min);
+    done()
+        .filter(|(_, r)| r.loss <= lowest * (1.0 + TIE_TOLERANCE))
+        .map(|(k, r)| (k, r.model.generator.tie_prior(&r.model.params), r.loss))
+        .min_by(|a, b| {
+            a.1.total_cmp(&b.1)
+                .then(a.2.total_cmp(&b.2))
+                .then(a.0.cmp(&b.0))
+        })
+        .map(|(k, _, _)| k)
 }
 
 /// Seed of run `k` of a fit seeded with `seed` (run 0 keeps it).
@@ -107,6 +137,7 @@ impl Session {
             runs.push(Run::new(c, masks.clone(), &plan)?);
         }
         Ok(Session {
+            finished: vec![None; runs.len()],
             config,
             runs,
             best: None,
@@ -133,15 +164,17 @@ impl Session {
                 p.done.then_some(p)
             })
             .collect();
+        let mut changed = false;
         for (k, last) in finished.into_iter().enumerate() {
             let Some(last) = last else { continue };
-            if let Ok(result) = self.runs[k].result()
-                && self.best.as_ref().is_none_or(|(j, b, _)| {
-                    result.loss < b.loss || (result.loss == b.loss && k < *j)
-                })
-            {
-                self.best = Some((k, result, last));
+            if let Ok(result) = self.runs[k].result() {
+                self.finished[k] = Some((result, last));
+                changed = true;
             }
+        }
+        if changed {
+            self.best =
+                pick(&self.finished).and_then(|k| self.finished[k].clone().map(|(r, p)| (k, r, p)));
         }
         self.progress()
     }
