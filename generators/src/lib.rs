@@ -435,6 +435,16 @@ pub trait Generator: Send + Sync {
         (Vec::new(), 0..0)
     }
 
+    /// Categorical parameters whose choice 0 is the simpler structure and whose other choices
+    /// add to it (a building's L-shaped footprint adds a wing to the rectangle). A part of the
+    /// model that one view does not show costs nothing in eq. 1, so the fit's hand-over treats
+    /// these as it treats Boolean parameters: Occam's step tries each at 0, and the best
+    /// stage-1 individual of each other structure is probed too (stage 1 may reach a structure
+    /// late and keep few individuals of it). None by default.
+    fn structure_choices(&self) -> &'static [usize] {
+        &[]
+    }
+
     /// The initial population the memetic optimiser starts from (paper §3.2: presets are
     /// concatenated into the initial population). Defaults to the presets' values.
     fn seeds(&self) -> Vec<Vec<f64>> {

@@ -259,7 +259,8 @@ impl Run {
             loss: best.value,
             stage: 1,
         });
-        let mut starts = probe_starts(&search.memetic, &best.x);
+        let structure = search.generator.structure_choices();
+        let mut starts = probe_starts(&search.memetic, &best.x, structure);
         let specs = search.generator.params();
         if search.objective.has_windows() {
             // Window labels can tell layouts that the silhouette cannot (see `window_sweep`).
@@ -280,7 +281,7 @@ impl Run {
         if let Phase::Adam(stage) = &mut self.phase {
             let side =
                 self.config.resolutions[1].min(self.masks[0].width().max(self.masks[0].height()));
-            let (x, spent) = probe(&stage.objective, &stage.domain, specs, starts);
+            let (x, spent) = probe(&stage.objective, &stage.domain, specs, structure, starts);
             stage.x = x;
             self.evaluations += spent;
             self.work_done += 2.0 * spent as f64 * work_weight(side);
