@@ -90,7 +90,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         "–".to_string()
                     } else {
                         notes.push(format!("- {} ({which} fov): {}", c.name, s.warnings.join(" / ")));
-                        format!("{}", s.warnings.len())
+                        s.warnings.len().to_string()
                     };
                     println!(
                         "| {} | {:.0}° | {:.0} mm | {setting} | {which} | {:.3} | {:.3} | {:.3} / {:.3} | {} | {secs:.1} | {warn} | {check:.3} |",

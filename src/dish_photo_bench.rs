@@ -206,8 +206,7 @@ pub fn binary_iou(a: &Mask, b: &Mask) -> f64 {
 /// How well procfit's renderer, given the case's camera, reproduces the renderer's silhouette
 /// of the truth (`mask_full`): a check of the data and of the camera conventions (≈ 0.99).
 pub fn truth_check(case: &BenchCase) -> Result<f64, FitError> {
-    let c = eval::view_iou(&case.truth, &case.view()?, &binarised(&case.mask_full))?;
-    Ok(c)
+    eval::view_iou(&case.truth, &case.view()?, &binarised(&case.mask_full))
 }
 
 fn binarised(m: &Mask) -> Mask {
