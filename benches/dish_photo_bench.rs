@@ -10,9 +10,10 @@
 //!
 //! `cargo bench --bench dish_photo_bench` runs everything; `-- --quick` at quality 0.4;
 //! `-- --fov known` or `-- --fov unknown` only that row; `-- --threads N`; `-- NAME …` only
-//! those cases; `-- --dir DIR` reads another folder.
+//! those cases; `-- --dir DIR` reads another folder; `-- --save DIR` writes each case's
+//! automatic mask there (`NAME-auto.png`, the hard cut) beside the true one (`NAME-true.png`).
 
-use procfit::dish_photo_bench::{BenchCase, case_dirs, fit_case, truth_check};
+use procfit::dish_photo_bench::{BenchCase, auto_segmentation, case_dirs, fit_case, truth_check};
 use std::path::PathBuf;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -22,10 +23,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut names = Vec::new();
     let mut fovs = vec![true, false];
     let mut threads = 2;
+    let mut save: Option<PathBuf> = None;
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
             "--dir" => dir = PathBuf::from(it.next().ok_or("--dir needs a folder")?),
+            "--save" => save = Some(PathBuf::from(it.next().ok_or("--save needs a folder")?)),
             "--threads" => threads = it.next().ok_or("--threads needs a number")?.parse()?,
             "--fov" => {
                 fovs = match it.next().map(String::as_str) {
@@ -73,6 +76,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let case = BenchCase::load(d)?;
         let c = &case.camera;
         let check = truth_check(&case)?;
+        if let Some(out) = &save {
+            std::fs::create_dir_all(out)?;
+            let seg = auto_segmentation(&case)?;
+            for (m, suffix) in [(&seg.object, "auto"), (&case.mask, "true")] {
+                let luma = m
+                    .values()
+                    .iter()
+                    .map(|&v| (v.clamp(0.0, 1.0) * 255.0) as u8)
+                    .collect();
+                image::GrayImage::from_raw(m.width(), m.height(), luma)
+                    .ok_or("bad mask size")?
+                    .save(out.join(format!("{}-{suffix}.png", c.name)))?;
+            }
+        }
         for &known in &fovs {
             let fov = known.then_some(c.fov_y);
             let t = std::time::Instant::now();
@@ -89,7 +106,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     let warn = if s.warnings.is_empty() {
                         "–".to_string()
                     } else {
-                        notes.push(format!("- {} ({which} fov): {}", c.name, s.warnings.join(" / ")));
+                        notes.push(format!(
+                            "- {} ({which} fov): {}",
+                            c.name,
+                            s.warnings.join(" / ")
+                        ));
                         s.warnings.len().to_string()
                     };
                     println!(

@@ -235,6 +235,14 @@ pub struct BenchScore {
     pub saucer: bool,
 }
 
+/// The automatic segmentation of the case's photo, as the CLI makes it (decoded at the
+/// working size, [`segment::segment_auto`]).
+pub fn auto_segmentation(case: &BenchCase) -> Result<segment::Segmentation, FitError> {
+    let e = |x: segment::SegmentError| FitError(x.0);
+    let photo = Photo::decode(&case.photo, segment::WORKING_SIDE).map_err(e)?;
+    segment::segment_auto(&photo).map_err(e)
+}
+
 /// Fits the case's photo as the CLI does (segmented automatically, the dish generator at the
 /// default settings, `fov_y` as `--fov` would give it, `None` as a PNG without EXIF) with
 /// `quality`, and scores it. The caller times it.
@@ -243,9 +251,7 @@ pub fn fit_case(
     fov_y: Option<f64>,
     quality: f64,
 ) -> Result<BenchScore, FitError> {
-    let e = |x: segment::SegmentError| FitError(x.0);
-    let photo = Photo::decode(&case.photo, segment::WORKING_SIDE).map_err(e)?;
-    let seg = segment::segment_auto(&photo).map_err(e)?;
+    let seg = auto_segmentation(case)?;
     if (seg.mask.width(), seg.mask.height()) != (case.mask.width(), case.mask.height()) {
         return Err(FitError(format!(
             "{}: the photo is not at the working size",

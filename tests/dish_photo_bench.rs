@@ -90,21 +90,38 @@ fn a_fit_seen_by_another_camera_is_moved_onto_the_truth() {
     // The fit's view of the model is the photo's view of the truth.
     let a = render_coverage(&truth, &photo).unwrap();
     let b = render_coverage(&model_mesh, &fitted).unwrap();
-    let diff = a.iter().zip(&b).map(|(x, y)| (x - y).abs()).fold(0.0, f32::max);
+    let diff = a
+        .iter()
+        .zip(&b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f32::max);
     assert!(diff < 0.02, "the two renders differ by {diff}");
     // Moved through the photo's camera, the model is the truth (up to scale): IoU-64 ≈ 1.
     let moved = to_photo_frame(&model, &fitted, &photo);
-    let good = iou64((&moved, &truth.triangles), (&truth.positions, &truth.triangles), 128).unwrap();
-    assert!(good > 0.995, "moved through the photo's camera: IoU-64 {good}");
+    let good = iou64(
+        (&moved, &truth.triangles),
+        (&truth.positions, &truth.triangles),
+        128,
+    )
+    .unwrap();
+    assert!(
+        good > 0.995,
+        "moved through the photo's camera: IoU-64 {good}"
+    );
     // Taken as if both cameras were one (the test recoveries' `align_to_reference`, which
     // assumes it), the model comes out tilted: the bench would be wrong by this much.
-    let wrong = procfit::reconstruct::align_to_reference(
-        &model,
-        &fitted.params,
-        &ViewParams::default(),
+    let wrong =
+        procfit::reconstruct::align_to_reference(&model, &fitted.params, &ViewParams::default());
+    let bad = iou64(
+        (&wrong, &truth.triangles),
+        (&truth.positions, &truth.triangles),
+        128,
+    )
+    .unwrap();
+    assert!(
+        bad < good - 0.05,
+        "a wrong frame change scores {bad} against {good}"
     );
-    let bad = iou64((&wrong, &truth.triangles), (&truth.positions, &truth.triangles), 128).unwrap();
-    assert!(bad < good - 0.05, "a wrong frame change scores {bad} against {good}");
 }
 
 /// Writes a case in the script's layout: a flat-shaded photo over a plain background, the
@@ -149,7 +166,8 @@ fn write_case(dir: &std::path::Path, truth: &Mesh, cam: &BenchCamera) {
 
 #[test]
 fn a_case_loads_and_the_cli_pipeline_scores_it() {
-    let root: PathBuf = std::env::temp_dir().join(format!("procfit-dish-bench-{}", std::process::id()));
+    let root: PathBuf =
+        std::env::temp_dir().join(format!("procfit-dish-bench-{}", std::process::id()));
     assert!(case_dirs(&root.join("absent")).is_empty());
     let truth = cup();
     let cam = camera(&truth);
