@@ -4,6 +4,11 @@
 //! fit is moved into the truth's frame through the photo's camera correctly (a wrong frame
 //! change scores far lower), that a case loads and its camera reproduces its silhouette, and
 //! that the whole CLI pipeline (segment, fit, score) runs on it and scores it well.
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    reason = "a test binary: a failed step should stop it loudly"
+)]
 
 use glam::{DVec3, Vec3};
 use procfit::camera::{CameraPose, View, ViewParams};
