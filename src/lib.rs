@@ -13,6 +13,7 @@ pub use procfit_generators as generators;
 pub mod building_bench;
 pub mod camera;
 pub mod colors;
+pub mod dish_photo_bench;
 pub mod export;
 pub mod glb;
 pub mod loss;

@@ -1,0 +1,161 @@
+//! The independent dish photo benchmark (issue 16), not a test: the dish fit, as
+//! `procfit reconstruct photo.png --generator dish` runs it, on the photo-realistic renders
+//! `python3 scripts/make-dish-photo-bench.py` writes with Mitsuba 3 into
+//! `target/dish-photo-bench/` (run that first; without it this says so and stops). Per case
+//! and field of view (known, as `--fov` gives it; unknown, as for a PNG without EXIF): the
+//! automatic mask's IoU against the true visible mask, the paper's IoU-64, the photo-view IoU
+//! against the true silhouette and the CLI's own (against the automatic mask), whether a
+//! saucer was fitted, the wall time on 2 threads and the CLI's warnings; then the means.
+//! See [`procfit::dish_photo_bench`].
+//!
+//! `cargo bench --bench dish_photo_bench` runs everything; `-- --quick` at quality 0.4;
+//! `-- --fov known` or `-- --fov unknown` only that row; `-- --threads N`; `-- NAME …` only
+//! those cases; `-- --dir DIR` reads another folder; `-- --save DIR` writes each case's
+//! automatic mask there (`NAME-auto.png`, the hard cut) beside the true one (`NAME-true.png`).
+
+use procfit::dish_photo_bench::{BenchCase, auto_segmentation, case_dirs, fit_case, truth_check};
+use std::path::PathBuf;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let quick = args.iter().any(|a| a == "--quick");
+    let mut dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/dish-photo-bench");
+    let mut names = Vec::new();
+    let mut fovs = vec![true, false];
+    let mut threads = 2;
+    let mut save: Option<PathBuf> = None;
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "--dir" => dir = PathBuf::from(it.next().ok_or("--dir needs a folder")?),
+            "--save" => save = Some(PathBuf::from(it.next().ok_or("--save needs a folder")?)),
+            "--threads" => threads = it.next().ok_or("--threads needs a number")?.parse()?,
+            "--fov" => {
+                fovs = match it.next().map(String::as_str) {
+                    Some("known") => vec![true],
+                    Some("unknown") => vec![false],
+                    _ => return Err("--fov takes known or unknown".into()),
+                }
+            }
+            n if !n.starts_with('-') => names.push(n.to_string()),
+            _ => {}
+        }
+    }
+    let dirs: Vec<_> = case_dirs(&dir)
+        .into_iter()
+        .filter(|d| {
+            names.is_empty()
+                || names
+                    .iter()
+                    .any(|n| d.file_name().is_some_and(|f| f == n.as_str()))
+        })
+        .collect();
+    if dirs.is_empty() {
+        println!(
+            "no dish photo benchmark cases in {}: run `python3 scripts/make-dish-photo-bench.py` first (needs `pip install mitsuba`)",
+            dir.display()
+        );
+        return Ok(());
+    }
+    let quality = if quick { 0.4 } else { 1.0 };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()?;
+    println!(
+        "## Independent dish photo benchmark (Mitsuba 3), {} cases, {threads} threads, quality {quality}\n",
+        dirs.len()
+    );
+    println!(
+        "| case | above | lens | saucer / spoon | fov | mask IoU | IoU-64 | photo-view IoU (true / CLI) | saucer fitted | seconds | warnings | truth check |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    // Per fov row: mask IoU, IoU-64, photo-view IoU, seconds.
+    let mut sums: Vec<(bool, Vec<[f64; 4]>)> = Vec::new();
+    let mut notes = Vec::new();
+    for d in &dirs {
+        let case = BenchCase::load(d)?;
+        let c = &case.camera;
+        let check = truth_check(&case)?;
+        if let Some(out) = &save {
+            std::fs::create_dir_all(out)?;
+            let seg = auto_segmentation(&case)?;
+            for (m, suffix) in [(&seg.object, "auto"), (&case.mask, "true")] {
+                let luma = m
+                    .values()
+                    .iter()
+                    .map(|&v| (v.clamp(0.0, 1.0) * 255.0) as u8)
+                    .collect();
+                image::GrayImage::from_raw(m.width(), m.height(), luma)
+                    .ok_or("bad mask size")?
+                    .save(out.join(format!("{}-{suffix}.png", c.name)))?;
+            }
+        }
+        for &known in &fovs {
+            let fov = known.then_some(c.fov_y);
+            let t = std::time::Instant::now();
+            let r = pool.install(|| fit_case(&case, fov, quality));
+            let secs = t.elapsed().as_secs_f64();
+            let which = if known { "known" } else { "unknown" };
+            let setting = format!(
+                "{} / {}",
+                if c.has_saucer { "saucer" } else { "–" },
+                if c.spoon == "none" { "–" } else { &c.spoon }
+            );
+            match r {
+                Ok(s) => {
+                    let warn = if s.warnings.is_empty() {
+                        "–".to_string()
+                    } else {
+                        notes.push(format!(
+                            "- {} ({which} fov): {}",
+                            c.name,
+                            s.warnings.join(" / ")
+                        ));
+                        s.warnings.len().to_string()
+                    };
+                    println!(
+                        "| {} | {:.0}° | {:.0} mm | {setting} | {which} | {:.3} | {:.3} | {:.3} / {:.3} | {} | {secs:.1} | {warn} | {check:.3} |",
+                        c.name,
+                        c.elevation_deg,
+                        c.focal_35mm,
+                        s.mask_iou,
+                        s.iou64,
+                        s.photo_iou,
+                        s.cli_photo_iou,
+                        if s.saucer { "yes" } else { "no" },
+                    );
+                    let row = [s.mask_iou, s.iou64, s.photo_iou, secs];
+                    match sums.iter_mut().find(|x| x.0 == known) {
+                        Some(x) => x.1.push(row),
+                        None => sums.push((known, vec![row])),
+                    }
+                }
+                Err(e) => println!(
+                    "| {} | {:.0}° | {:.0} mm | {setting} | {which} | failed: {e} | | | | {secs:.1} | | {check:.3} |",
+                    c.name, c.elevation_deg, c.focal_35mm
+                ),
+            }
+        }
+    }
+    for (known, rows) in &sums {
+        let n = rows.len() as f64;
+        let mean = |k: usize| rows.iter().map(|r| r[k]).sum::<f64>() / n;
+        println!(
+            "| **mean** ({} fitted) | | | | {} | {:.3} | {:.3} | {:.3} | | {:.1} | | |",
+            rows.len(),
+            if *known { "known" } else { "unknown" },
+            mean(0),
+            mean(1),
+            mean(2),
+            mean(3)
+        );
+    }
+    println!("\nTargets (issue 16): automatic mask IoU ≥ 0.95, IoU-64 mean ≥ 0.93.");
+    if !notes.is_empty() {
+        println!("\nWarnings the CLI would print:\n");
+        for n in &notes {
+            println!("{n}");
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,305 @@
+//! The independent dish photo benchmark (issue 16): photo-realistic renders of dishes procfit
+//! did not make, by a renderer procfit did not write, and their scoring.
+//!
+//! `scripts/make-dish-photo-bench.py` renders them with Mitsuba 3 into one folder per case
+//! (`photo.png`, `mask.png`, `mask_full.png`, `camera.json`, `truth.obj`, and `spoon.obj` when
+//! a spoon is in the scene): a mug, a teacup, an espresso cup, a cappuccino cup, two bowls, a
+//! tumbler and a vase lathed from measured dimensions, some on a saucer, some with a spoon, on
+//! a wooden table under an area light and a room environment, seen from 10°–60° above through
+//! 35–70 mm lenses. The object is the dish with its saucer when it stands on one; the spoon
+//! never is. `mask.png` is the object's visible pixels (the spoon hides what it covers),
+//! `mask_full.png` its whole silhouette.
+//!
+//! Each case is fitted as `procfit reconstruct photo.png --generator dish [--fov F]` does:
+//! the photo decoded at the working size, [`segment::segment_auto`], the dish fit at its
+//! default settings ([`FitConfig`]; small extras such as a spoon made don't care). Scores:
+//! - the automatic mask's IoU against the true visible mask (the hard cut, every pixel);
+//! - the paper's IoU-64 against the truth: the fit is moved into the truth's frame through the
+//!   photo's camera ([`to_photo_frame`]: the fitted camera's view of the model is placed in
+//!   front of the photo's camera), both normalised to their box, 64 turntable views at 128²;
+//! - the photo-view IoU: the fit through its fitted camera against the true whole silhouette;
+//!   and the CLI's own photo-view IoU (against the automatic mask) with its warnings.
+//!
+//! `cargo bench --bench dish_photo_bench` prints the table; `tests/dish_photo_bench.rs` checks
+//! the loading and the frame change on a case it writes itself (no renderer needed).
+
+use crate::camera::{CameraPose, View, ViewParams};
+use crate::generators::{Generator, Lod, Mesh};
+use crate::mask::Mask;
+use crate::reconstruct::{FitConfig, FitError, Session, eval, iou64};
+use crate::segment::{self, Photo};
+use glam::{DVec3, Vec3};
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+/// The photo's camera and what the case is, as the script wrote it (`camera.json`; the
+/// scene's frame: metres, Y up, the table at y = 0).
+#[derive(Clone, Debug, Deserialize)]
+pub struct BenchCamera {
+    /// Case name.
+    pub name: String,
+    /// The dish (mug, teacup, espresso, cappuccino, bowl, serving-bowl, tumbler, vase).
+    pub kind: String,
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Vertical field of view, radians.
+    pub fov_y: f64,
+    /// The lens as a 35 mm-equivalent focal length (what EXIF would say).
+    pub focal_35mm: f64,
+    /// Camera position.
+    pub position: [f64; 3],
+    /// The point it looks at.
+    pub target: [f64; 3],
+    /// The camera's up direction.
+    pub up: [f64; 3],
+    /// The camera's elevation above the table, degrees.
+    pub elevation_deg: f64,
+    /// The parts of `truth.obj` that are the object (the dish, and its saucer).
+    pub object_parts: Vec<String>,
+    /// Whether the dish stands on a saucer.
+    pub has_saucer: bool,
+    /// Where the spoon is: `none`, `in` (the cup) or `beside`.
+    pub spoon: String,
+}
+
+/// One benchmark case, loaded.
+pub struct BenchCase {
+    /// The camera and names.
+    pub camera: BenchCamera,
+    /// The photo file's bytes (PNG), decoded as the CLI decodes a photo.
+    pub photo: Vec<u8>,
+    /// The object's visible pixels (coverage 0..1).
+    pub mask: Mask,
+    /// The object's whole silhouette (coverage 0..1).
+    pub mask_full: Mask,
+    /// The object's true mesh, in the scene's frame.
+    pub truth: Mesh,
+}
+
+/// Reads a grey PNG as coverage (0..1).
+pub fn read_mask(path: &Path) -> Result<Mask, FitError> {
+    let img = image::open(path)
+        .map_err(|e| FitError(format!("{}: {e}", path.display())))?
+        .to_luma8();
+    let values = img.as_raw().iter().map(|&v| f32::from(v) / 255.0).collect();
+    Mask::new(img.width(), img.height(), values).map_err(|e| FitError(e.to_string()))
+}
+
+impl BenchCase {
+    /// Loads the case in `dir`.
+    pub fn load(dir: &Path) -> Result<BenchCase, FitError> {
+        let at = |p: &Path, e: &dyn std::fmt::Display| FitError(format!("{}: {e}", p.display()));
+        let cam_path = dir.join("camera.json");
+        let text = std::fs::read_to_string(&cam_path).map_err(|e| at(&cam_path, &e))?;
+        let camera: BenchCamera = serde_json::from_str(&text).map_err(|e| at(&cam_path, &e))?;
+        let photo_path = dir.join("photo.png");
+        let photo = std::fs::read(&photo_path).map_err(|e| at(&photo_path, &e))?;
+        let obj_path = dir.join("truth.obj");
+        let obj = std::fs::read(&obj_path).map_err(|e| at(&obj_path, &e))?;
+        let reference = crate::glb::import_obj(&obj).map_err(|e| at(&obj_path, &e))?;
+        let truth = Mesh {
+            positions: reference.positions,
+            triangles: reference.triangles,
+            ..Mesh::default()
+        };
+        let mask = read_mask(&dir.join("mask.png"))?;
+        let mask_full = read_mask(&dir.join("mask_full.png"))?;
+        for m in [&mask, &mask_full] {
+            if (m.width(), m.height()) != (camera.width, camera.height) {
+                return Err(FitError(format!(
+                    "{}: a mask is {}×{}, the camera {}×{}",
+                    dir.display(),
+                    m.width(),
+                    m.height(),
+                    camera.width,
+                    camera.height
+                )));
+            }
+        }
+        Ok(BenchCase {
+            camera,
+            photo,
+            mask,
+            mask_full,
+            truth,
+        })
+    }
+
+    /// The photo's camera as a [`View`] of the scene's frame (the object transform is the
+    /// identity).
+    pub fn view(&self) -> Result<View, FitError> {
+        photo_view(&self.camera)
+    }
+}
+
+/// The photo's camera of `camera` as a [`View`] (identity object transform).
+pub fn photo_view(camera: &BenchCamera) -> Result<View, FitError> {
+    let e = |x: crate::camera::CameraError| FitError(x.0);
+    let view = View {
+        width: camera.width,
+        height: camera.height,
+        pose: CameraPose::look_at(
+            DVec3::from_array(camera.position),
+            DVec3::from_array(camera.target),
+            DVec3::from_array(camera.up),
+        )
+        .map_err(e)?,
+        params: ViewParams {
+            fov_y: camera.fov_y,
+            ..ViewParams::default()
+        },
+    };
+    view.params.validate().map_err(e)?;
+    Ok(view)
+}
+
+/// Lists the case folders under `root` (those with a `camera.json`), sorted by name; empty when
+/// `root` does not exist.
+pub fn case_dirs(root: &Path) -> Vec<PathBuf> {
+    let mut dirs: Vec<_> = std::fs::read_dir(root)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.join("camera.json").is_file())
+        .collect();
+    dirs.sort();
+    dirs
+}
+
+/// Moves a model seen through `fitted` (its object transform and camera) into the frame of
+/// `photo`, another camera of the same image with the identity object transform: each point's
+/// position in `fitted`'s camera space is put at the same place in `photo`'s. The fit cannot
+/// know its depth, so the result is the truth's frame up to a scale about the photo's camera,
+/// which the IoU-64's normalisation removes.
+pub fn to_photo_frame(positions: &[Vec3], fitted: &View, photo: &View) -> Vec<Vec3> {
+    let proj = fitted.projector();
+    positions
+        .iter()
+        .map(|&p| {
+            let c = proj.to_camera(p);
+            (photo.pose.position + photo.pose.rotation * c).as_vec3()
+        })
+        .collect()
+}
+
+/// The IoU of two masks cut at ½ (don't-care pixels of either left out).
+pub fn binary_iou(a: &Mask, b: &Mask) -> f64 {
+    let (mut inter, mut union) = (0usize, 0usize);
+    for (&x, &y) in a.values().iter().zip(b.values()) {
+        if x == Mask::DONT_CARE || y == Mask::DONT_CARE {
+            continue;
+        }
+        let (x, y) = (x >= 0.5, y >= 0.5);
+        inter += usize::from(x && y);
+        union += usize::from(x || y);
+    }
+    if union == 0 {
+        1.0
+    } else {
+        inter as f64 / union as f64
+    }
+}
+
+/// How well procfit's renderer, given the case's camera, reproduces the renderer's silhouette
+/// of the truth (`mask_full`): a check of the data and of the camera conventions (≈ 0.99).
+pub fn truth_check(case: &BenchCase) -> Result<f64, FitError> {
+    eval::view_iou(&case.truth, &case.view()?, &binarised(&case.mask_full))
+}
+
+fn binarised(m: &Mask) -> Mask {
+    let v = m
+        .values()
+        .iter()
+        .map(|&x| if x >= 0.5 { 1.0 } else { 0.0 })
+        .collect();
+    Mask::new(m.width(), m.height(), v).unwrap_or_else(|_| m.clone())
+}
+
+/// The scores of one fit of a case.
+#[derive(Clone, Debug)]
+pub struct BenchScore {
+    /// The automatic mask (the hard cut) against the true visible mask.
+    pub mask_iou: f64,
+    /// The paper's IoU-64 against the truth (128², the fit at HIGH in the truth's frame).
+    pub iou64: f64,
+    /// The fit through its fitted camera against the true whole silhouette.
+    pub photo_iou: f64,
+    /// The fit through its fitted camera against the automatic mask (what the CLI prints).
+    pub cli_photo_iou: f64,
+    /// What the CLI would tell: the mask's warnings, then the "does not match" one.
+    pub warnings: Vec<String>,
+    /// The fitted dish's saucer switch (`has_saucer` > ½).
+    pub saucer: bool,
+}
+
+/// The automatic segmentation of the case's photo, as the CLI makes it (decoded at the
+/// working size, [`segment::segment_auto`]).
+pub fn auto_segmentation(case: &BenchCase) -> Result<segment::Segmentation, FitError> {
+    let e = |x: segment::SegmentError| FitError(x.0);
+    let photo = Photo::decode(&case.photo, segment::WORKING_SIDE).map_err(e)?;
+    segment::segment_auto(&photo).map_err(e)
+}
+
+/// Fits the case's photo as the CLI does (segmented automatically, the dish generator at the
+/// default settings, `fov_y` as `--fov` would give it, `None` as a PNG without EXIF) with
+/// `quality`, and scores it. The caller times it.
+pub fn fit_case(
+    case: &BenchCase,
+    fov_y: Option<f64>,
+    quality: f64,
+) -> Result<BenchScore, FitError> {
+    let seg = auto_segmentation(case)?;
+    if (seg.mask.width(), seg.mask.height()) != (case.mask.width(), case.mask.height()) {
+        return Err(FitError(format!(
+            "{}: the photo is not at the working size",
+            case.camera.name
+        )));
+    }
+    let mask_iou = binary_iou(&seg.object, &case.mask);
+    let config = FitConfig {
+        generator: crate::generators::dish::Dish.name().into(),
+        fov_y: vec![fov_y],
+        quality,
+        restarts: FitConfig::restarts_for_quality(quality),
+        ..FitConfig::default()
+    };
+    let masks = vec![seg.mask.clone()];
+    let result = Session::new(config, masks.clone())?.run()?;
+    let mut warnings = seg.warnings.clone();
+    let cli_ious = eval::result_photo_ious(&result, &masks)?;
+    if let Some(w) = eval::photo_match_warning(&cli_ious, &["photo".into()]) {
+        warnings.push(w);
+    }
+    let g = result.model.generator;
+    let mesh = g
+        .generate(&result.model.params, Lod::High)
+        .map_err(|x| FitError(x.to_string()))?;
+    let fitted = result
+        .views
+        .first()
+        .ok_or_else(|| FitError("a fit without a view".into()))?;
+    let moved = to_photo_frame(&mesh.positions, fitted, &case.view()?);
+    let iou = iou64(
+        (&moved, &mesh.triangles),
+        (&case.truth.positions, &case.truth.triangles),
+        128,
+    )?;
+    let photo_iou = eval::view_iou(&mesh, fitted, &binarised(&case.mask_full))?;
+    let saucer = g
+        .params()
+        .iter()
+        .position(|s| s.name == "has_saucer")
+        .and_then(|i| result.model.params.get(i))
+        .is_some_and(|&v| v > 0.5);
+    Ok(BenchScore {
+        mask_iou,
+        iou64: iou,
+        photo_iou,
+        cli_photo_iou: cli_ious.first().copied().unwrap_or(0.0),
+        warnings,
+        saucer,
+    })
+}
