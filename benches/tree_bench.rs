@@ -7,7 +7,7 @@
 //! baselines: a sphere, an ellipsoid on the truth's crown box, the same species another seed.
 //!
 //! `cargo bench --bench tree_bench` fits the colour photo (labelled as the CLI does);
-//! `-- --labels` fits the true label image too; `-- --quick` cuts the GA budget by 4;
+//! `-- --labels` fits the true label image too; `-- --quick` cuts the GA budget (`PHOTO_GA_BUDGET`) by 4;
 //! `-- NAME …` runs only those cases; `-- --dir DIR` reads another folder; `-- --analyse`
 //! adds a table of where the photo-view IoU is lost ([`analyse_silhouette`]: as is, leaf gaps
 //! closed, convex hulls, fills, area ratio) for each fit, the truth and the other seed.
@@ -41,7 +41,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     while let Some(a) = it.next() {
         match a.as_str() {
             "--dir" => dir = PathBuf::from(it.next().ok_or("--dir needs a folder")?),
-            "--weight" => weight = Some(it.next().ok_or("--weight needs a number")?.parse::<f64>()?),
+            "--weight" => {
+                weight = Some(it.next().ok_or("--weight needs a number")?.parse::<f64>()?)
+            }
             "--bench" | "--quick" | "--labels" | "--paper" | "--no-fov" | "--analyse"
             | "--no-envelope" | "--no-area" => {}
             n if !n.starts_with('-') => names.push(n.to_string()),
@@ -64,7 +66,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
         return Ok(());
     }
-    let budget = quick.then(|| procfit::tree::ga::GaConfig::default().evaluations() / 4);
+    let budget = quick.then(|| procfit::tree::impostor::PHOTO_GA_BUDGET / 4);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
     println!(
         "## Independent tree benchmark (ez-tree), {} cases, 2 threads{}\n",
@@ -181,7 +183,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     if !analyses.is_empty() {
         println!("## Where the photo-view IoU is lost\n");
-        println!("| tree | mesh | IoU | gaps closed | hulls | photo fill | mesh fill | area / photo's |");
+        println!(
+            "| tree | mesh | IoU | gaps closed | hulls | photo fill | mesh fill | area / photo's |"
+        );
         println!("|---|---|---|---|---|---|---|---|");
         for what in ["fit", "truth", "other seed"] {
             let rows: Vec<_> = analyses.iter().filter(|r| r.1 == what).collect();
@@ -192,7 +196,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 );
             }
             let n = rows.len().max(1) as f64;
-            let mean = |f: fn(&SilhouetteAnalysis) -> f64| rows.iter().map(|r| f(&r.2)).sum::<f64>() / n;
+            let mean =
+                |f: fn(&SilhouetteAnalysis) -> f64| rows.iter().map(|r| f(&r.2)).sum::<f64>() / n;
             println!(
                 "| **mean** | {what} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} |",
                 mean(|a| a.iou),
