@@ -36,7 +36,10 @@ fn drawn(foot_x: usize, bottom: usize, crown: (usize, usize, usize, usize)) -> L
 }
 
 fn close(a: f64, b: f64, tol: f64, what: &str) {
-    assert!((a - b).abs() <= tol, "{what}: {a:.3}, expected {b:.3} ± {tol}");
+    assert!(
+        (a - b).abs() <= tol,
+        "{what}: {a:.3}, expected {b:.3} ± {tol}"
+    );
 }
 
 #[test]

@@ -203,8 +203,10 @@ pub struct TreeFitConfig {
 /// The largest factor [`TreeFitConfig::area_framing`] scales a tree by (or its inverse).
 pub const MAX_AREA_SCALE: f64 = 1.5;
 
-/// The silhouette weight of photo fits ([`TreeFitConfig::silhouette_weight`]).
-pub const PHOTO_SILHOUETTE_WEIGHT: f64 = 0.5;
+/// The silhouette weight of photo fits ([`TreeFitConfig::silhouette_weight`]): the crown's
+/// outline counts more than the paper's stripes, whose leaf/branch pattern an independent
+/// tree's photo matches only loosely (issue 14; 0.5 before the envelope seeds).
+pub const PHOTO_SILHOUETTE_WEIGHT: f64 = 0.8;
 
 /// Candidates per round of the final local search.
 pub const POLISH_BATCH: usize = 16;
