@@ -506,13 +506,14 @@ impl TreeSession {
         // The presets fitted to the reference's crown envelope join them, with the seed gene
         // the GA will use (the start's when refitting).
         let mut presets = presets;
-        if cfg.envelope_seeds && cfg.start_from_presets {
-            if let Some(target) = Envelope::measure(reference_labels) {
-                let mut imp = impostors[0]
-                    .lock()
-                    .map_err(|_| TreeError("an impostor renderer was poisoned".into()))?;
-                presets.extend(envelope_seeds(&target, &mut imp, cfg.fixed_seed)?);
-            }
+        if cfg.envelope_seeds
+            && cfg.start_from_presets
+            && let Some(target) = Envelope::measure(reference_labels)
+        {
+            let mut imp = impostors[0]
+                .lock()
+                .map_err(|_| TreeError("an impostor renderer was poisoned".into()))?;
+            presets.extend(envelope_seeds(&target, &mut imp, cfg.fixed_seed)?);
         }
         // Leaf GAs take their seeded genomes from this list in turn: with a start, every
         // other one is the start (the list's length is even, and so is each leaf's offset).
