@@ -66,7 +66,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
         return Ok(());
     }
-    let budget = quick.then(|| procfit::tree::impostor::PHOTO_GA_BUDGET / 4);
+    let budget = quick.then_some(procfit::tree::impostor::PHOTO_GA_BUDGET / 4);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
     println!(
         "## Independent tree benchmark (ez-tree), {} cases, 2 threads{}\n",
