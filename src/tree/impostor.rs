@@ -767,10 +767,10 @@ pub const PHOTO_FIT_SIZE: u32 = 128;
 pub const MIN_QUALITY_BUDGET: usize = 200;
 
 /// GA evaluations of a photo fit at the default quality ([`start_photo_fit`] without a
-/// budget): a quarter of [`GaConfig::default`]'s 4 608. On the independent tree benchmark
-/// (issue 14) a photo fit with the envelope seeds and the area framing is as good at this
-/// budget as at the full one (the previous helper's measurement: mean IoU-64 0.486 at half
-/// of it against 0.494 here), in a quarter of the time; `fit_tree`'s default keeps the
+/// budget): a quarter of [`GaConfig::default`]'s 4 608, so a fit stays within issue 14's
+/// time limit. On the independent tree benchmark it scores mean IoU-64 0.472 (colour photos,
+/// 11 trees); a larger budget was not measured against it on this code (an earlier,
+/// unmerged version found half of this budget within 0.01). `fit_tree`'s default keeps the
 /// paper-sized budget.
 pub const PHOTO_GA_BUDGET: usize = 1152;
 
