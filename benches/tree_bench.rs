@@ -7,10 +7,15 @@
 //! baselines: a sphere, an ellipsoid on the truth's crown box, the same species another seed.
 //!
 //! `cargo bench --bench tree_bench` fits the colour photo (labelled as the CLI does);
-//! `-- --labels` fits the true label image too; `-- --quick` cuts the GA budget by 4;
-//! `-- NAME …` runs only those cases; `-- --dir DIR` reads another folder.
+//! `-- --labels` fits the true label image too; `-- --quick` cuts the GA budget (`PHOTO_GA_BUDGET`) by 4;
+//! `-- NAME …` runs only those cases; `-- --dir DIR` reads another folder; `-- --analyse`
+//! adds a table of where the photo-view IoU is lost ([`analyse_silhouette`]: as is, leaf gaps
+//! closed, convex hulls, fills, area ratio) for each fit, the truth and the other seed.
 
-use procfit::tree::bench::{BenchCase, case_dirs, crown_ellipsoid, fit_case, sphere};
+use procfit::tree::bench::{
+    BenchCase, SilhouetteAnalysis, analyse_silhouette, case_dirs, crown_ellipsoid, fit_case_mesh,
+    sphere,
+};
 use procfit::tree::impostor::{PhotoFitOptions, silhouette_iou64};
 use procfit::tree::labels::{ColorThresholds, foliage_problem, photo_labels};
 use std::path::PathBuf;
@@ -23,13 +28,24 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // of view unknown to the fit; both for before/after comparisons.
     let paper = args.iter().any(|a| a == "--paper");
     let no_fov = args.iter().any(|a| a == "--no-fov");
+    let analyse = args.iter().any(|a| a == "--analyse");
+    // `--no-envelope`: without the crown-envelope seeds; `--no-area`: without the area framing;
+    // `--weight W`: another silhouette weight.
+    let no_envelope = args.iter().any(|a| a == "--no-envelope");
+    let no_area = args.iter().any(|a| a == "--no-area");
+    let mut weight = None;
+    let mut analyses: Vec<(String, &str, SilhouetteAnalysis)> = Vec::new();
     let mut dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/tree-bench");
     let mut names = Vec::new();
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
             "--dir" => dir = PathBuf::from(it.next().ok_or("--dir needs a folder")?),
-            "--bench" | "--quick" | "--labels" | "--paper" | "--no-fov" => {}
+            "--weight" => {
+                weight = Some(it.next().ok_or("--weight needs a number")?.parse::<f64>()?)
+            }
+            "--bench" | "--quick" | "--labels" | "--paper" | "--no-fov" | "--analyse"
+            | "--no-envelope" | "--no-area" => {}
             n if !n.starts_with('-') => names.push(n.to_string()),
             _ => {}
         }
@@ -50,7 +66,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
         return Ok(());
     }
-    let budget = quick.then(|| procfit::tree::ga::GaConfig::default().evaluations() / 4);
+    let budget = quick.then_some(procfit::tree::impostor::PHOTO_GA_BUDGET / 4);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
     println!(
         "## Independent tree benchmark (ez-tree), {} cases, 2 threads{}\n",
@@ -81,12 +97,48 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         fov_y: (!no_fov).then_some(case.camera.fov_y),
                         ..PhotoFitOptions::default()
                     };
+                    if let Some(w) = weight {
+                        options.silhouette_weight = w;
+                    }
                     if paper {
                         options.silhouette_weight = 0.0;
                     }
+                    if no_envelope {
+                        options.envelope_seeds = false;
+                    }
+                    if no_area {
+                        options.area_framing = false;
+                    }
                     let t = std::time::Instant::now();
-                    pool.install(|| fit_case(&case, labels, budget, &options))
-                        .map(|r| (r, t.elapsed().as_secs_f64()))
+                    pool.install(|| fit_case_mesh(&case, labels, budget, &options))
+                        .map(|(r, mesh, view)| {
+                            let seconds = t.elapsed().as_secs_f64();
+                            if analyse {
+                                let c = &case.camera.name;
+                                let truth_view = case.view();
+                                let rows = [
+                                    ("fit", analyse_silhouette(&mesh, &view, &case.labels)),
+                                    (
+                                        "truth",
+                                        truth_view.clone().and_then(|v| {
+                                            analyse_silhouette(&case.truth, &v, &case.labels)
+                                        }),
+                                    ),
+                                    (
+                                        "other seed",
+                                        truth_view.and_then(|v| {
+                                            analyse_silhouette(&case.other, &v, &case.labels)
+                                        }),
+                                    ),
+                                ];
+                                for (what, a) in rows {
+                                    if let Ok(a) = a {
+                                        analyses.push((c.clone(), what, a));
+                                    }
+                                }
+                            }
+                            (r, seconds)
+                        })
                 }
             };
             let c = &case.camera;
@@ -128,6 +180,34 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "\n{input}: {above} of {} fitted trees above the sphere\n",
             rows.len()
         );
+    }
+    if !analyses.is_empty() {
+        println!("## Where the photo-view IoU is lost\n");
+        println!(
+            "| tree | mesh | IoU | gaps closed | hulls | photo fill | mesh fill | area / photo's |"
+        );
+        println!("|---|---|---|---|---|---|---|---|");
+        for what in ["fit", "truth", "other seed"] {
+            let rows: Vec<_> = analyses.iter().filter(|r| r.1 == what).collect();
+            for (name, _, a) in &rows {
+                println!(
+                    "| {name} | {what} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} |",
+                    a.iou, a.closed_iou, a.hull_iou, a.photo_fill, a.fit_fill, a.area_ratio
+                );
+            }
+            let n = rows.len().max(1) as f64;
+            let mean =
+                |f: fn(&SilhouetteAnalysis) -> f64| rows.iter().map(|r| f(&r.2)).sum::<f64>() / n;
+            println!(
+                "| **mean** | {what} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} |",
+                mean(|a| a.iou),
+                mean(|a| a.closed_iou),
+                mean(|a| a.hull_iou),
+                mean(|a| a.photo_fill),
+                mean(|a| a.fit_fill),
+                mean(|a| a.area_ratio)
+            );
+        }
     }
     Ok(())
 }

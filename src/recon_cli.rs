@@ -27,8 +27,8 @@ pub struct ReconstructArgs {
     /// Seed of the fit (same seed, same result).
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Stage-1 evaluations (default 5000 × quality; for a tree, the GA's, default 4608 ×
-    /// quality, 4896 with the seed trials and the local search).
+    /// Stage-1 evaluations (default 5000 × quality; for a tree, the GA's, default 1152 ×
+    /// quality, plus the seed trials and the local search).
     #[arg(long)]
     budget: Option<usize>,
     /// Whole fits from different seeds, run side by side; the lowest final loss wins (not for

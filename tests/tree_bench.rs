@@ -1,9 +1,9 @@
 //! The independent tree benchmark in CI (issue 14): two ez-tree trees (a round broadleaf and a
 //! tall narrow aspen), rendered for this test by `scripts/make-tree-bench.mjs` (node, the npm
 //! packages `npm ci` installs, Debian's Chromium; about 10 s), fitted from their colour photos
-//! at a quarter of the default GA budget, must beat the sphere baseline's IoU-64 by
-//! [`MARGIN`]. Measured (`cargo bench --bench tree_bench -- --quick ash-medium aspen-large`):
-//! see ARCHITECTURE.md's tree benchmark numbers.
+//! at a photo fit's default budget (`PHOTO_GA_BUDGET`, a quarter of the GA's 4 608), must beat
+//! the sphere baseline's IoU-64 by [`MARGIN`]. Measured (`cargo bench --bench tree_bench --
+//! ash-medium aspen-large`): see ARCHITECTURE.md's tree benchmark numbers.
 
 use procfit::tree::bench::{BenchCase, fit_case, sphere};
 use procfit::tree::impostor::{PhotoFitOptions, silhouette_iou64};
@@ -11,8 +11,9 @@ use procfit::tree::labels::{ColorThresholds, photo_labels};
 use std::path::PathBuf;
 use std::process::Command;
 
-/// How much better than a sphere (IoU-64) each fitted tree must be.
-const MARGIN: f64 = 0.03;
+/// How much better than a sphere (IoU-64) each fitted tree must be (0.03 before the envelope
+/// seeds and the area framing).
+const MARGIN: f64 = 0.05;
 
 #[test]
 fn fits_beat_the_sphere_on_independent_trees() {
@@ -28,7 +29,6 @@ fn fits_beat_the_sphere_on_independent_trees() {
         .status()
         .expect("node runs (the benchmark needs Node.js, `npm ci` and /usr/bin/chromium)");
     assert!(status.success(), "make-tree-bench.mjs failed");
-    let budget = procfit::tree::ga::GaConfig::default().evaluations() / 4;
     for name in names {
         let case = BenchCase::load(&out.join(name)).expect("case");
         let (w, h, px) = &case.photo;
@@ -37,7 +37,7 @@ fn fits_beat_the_sphere_on_independent_trees() {
             fov_y: Some(case.camera.fov_y),
             ..PhotoFitOptions::default()
         };
-        let score = fit_case(&case, &labels, Some(budget), &options).expect("fits");
+        let score = fit_case(&case, &labels, None, &options).expect("fits");
         let sph = silhouette_iou64(&case.truth, &sphere(), 128).expect("iou");
         println!("{name}: {score:?}, sphere {sph:.3}");
         assert!(

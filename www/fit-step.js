@@ -56,11 +56,13 @@ $('refit').addEventListener('click', () => {
 });
 
 /**
- * A tree refit's similarity to the photo, before → after (its result says both); else ''.
+ * A tree fit's similarity to the photo (the photo-view IoU is said beside it, by showMatch); a
+ * refit's before → after (its result says both); '' for a fit without one (silhouette fits).
  * @param {{ start_similarity?: number, similarity?: number }} r
  */
 function similarityChange(r) {
-  if (typeof r.start_similarity !== 'number' || typeof r.similarity !== 'number') return '';
+  if (typeof r.similarity !== 'number') return '';
+  if (typeof r.start_similarity !== 'number') return `, similarity to the photo ${r.similarity.toFixed(3)}`;
   return `, similarity to the photo ${r.start_similarity.toFixed(3)} → ${r.similarity.toFixed(3)}`;
 }
 

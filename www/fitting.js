@@ -113,7 +113,18 @@ export class FitRunner extends EventTarget {
     try {
       const out = await this.client.call(
         REQUESTS.TREE_RUN,
-        { fitId, seed: 1, quality, width, height, rgba, codes, colors: treeColors(this.client, photo), ...(start ? { start } : {}) },
+        {
+          fitId,
+          seed: 1,
+          quality,
+          width,
+          height,
+          rgba,
+          codes,
+          colors: treeColors(this.client, photo),
+          focal_35mm: photo.focal35mm ?? null,
+          ...(start ? { start } : {}),
+        },
         {
           transfer: [rgba, codes],
           onEvent: (event, data) => {

@@ -74,7 +74,8 @@ export const REQUESTS = Object.freeze({
   // { width, height, rgba, codes } → { width, height, labels: ArrayBuffer } (0 background,
   // 1 branch, 2 leaf, 255 don't care), for the preview over the photo.
   TREE_LABELS: 'tree/labels',
-  // { fitId, seed, quality, width, height, rgba, codes, start?: number[] } → { cancelled,
+  // { fitId, seed, quality, width, height, rgba, codes, start?: number[], focal_35mm?: number | null }
+  // → { cancelled,
   // result: { generator (the tree generator's name), params, lod, seed, similarity, start_similarity, evaluations,
   // cameras, photo_ious: [number], match_level, match_warning?: string } } (`start_similarity`:
   // the start's, undefined without one; `match_warning`: a sentence when below the level).
@@ -83,7 +84,8 @@ export const REQUESTS = Object.freeze({
   // 'progress'
   // { stage (1 GA, 2 seed trials, 3 local search), generation, evaluations, total_evaluations,
   // best_similarity, params, done, preview: { width, height, labels: ArrayBuffer } | null } (the
-  // best tree's labels in the fit's square frame). Cancelled by FIT_CANCEL.
+  // best tree's labels in the fit's square frame). Cancelled by FIT_CANCEL. `focal_35mm` (from
+  // PHOTO_FOCAL) sets the fit's field of view, as for FIT_RUN's views.
   TREE_RUN: 'tree/run',
 });
 
@@ -92,7 +94,7 @@ export const REQUESTS = Object.freeze({
  * 'sys/ready' (`protocol`), and the page refuses a worker that speaks another one (an old
  * worker.js from a cache, say) with a message that says to reload.
  */
-export const PROTOCOL_VERSION = 10;
+export const PROTOCOL_VERSION = 11;
 
 /**
  * An error as it crosses the protocol: `panic` when a trap poisoned the worker.

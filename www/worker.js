@@ -239,7 +239,7 @@ async function stepFit(fitId, session, emit, preview, colorsOf = () => null) {
 }
 
 /** A tree fit, stepped in slices like runFit; the core turns `quality` into its budget. */
-async function runTreeFit({ fitId, seed = 1, quality = 1, width, height, rgba, codes, start = [], colors }, emit) {
+async function runTreeFit({ fitId, seed = 1, quality = 1, width, height, rgba, codes, start = [], colors, focal_35mm = null }, emit) {
   // The photo's labels under its colour rules: exactly what the mask step shows.
   const labels = wasm.treeLabels(width, height, new Uint8Array(rgba), new Uint8Array(codes ?? 0), colors ?? undefined);
   const session = wasm.TreeFitSession.fromLabels(
@@ -250,6 +250,8 @@ async function runTreeFit({ fitId, seed = 1, quality = 1, width, height, rgba, c
     quality,
     // Empty: from scratch; else the tree to refit from ("Refit from here").
     Float64Array.from(start ?? []),
+    // The photo's field of view from its EXIF focal length, as for the silhouette fits; 0: unknown.
+    focal_35mm && focal_35mm > 0 ? wasm.fovFromFocal35mm(focal_35mm, width, height) : 0,
   );
   return stepFit(fitId, session, emit, () => {
     // A preview comes only with the step that changed the best tree: always pass it on.

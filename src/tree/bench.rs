@@ -183,6 +183,154 @@ pub fn photo_view_iou(mesh: &Mesh, view: &View, mask: &LabelImage) -> Result<f64
     })
 }
 
+/// Binary masks of one view: where a mesh covers a pixel (coverage ≥ 0.5), as
+/// [`photo_view_iou`] counts it.
+pub fn coverage_mask(mesh: &Mesh, view: &View) -> Result<Vec<bool>, TreeError> {
+    let mut r = Renderer::new(view.width, view.height)?;
+    let topo = Topology::new(&mesh.triangles, mesh.positions.len())?;
+    Ok(r.forward(&topo, &mesh.positions, view)?
+        .iter()
+        .map(|&c| c >= 0.5)
+        .collect())
+}
+
+/// The object pixels of a label image (not background, not don't-care).
+pub fn object_mask(labels: &LabelImage) -> Vec<bool> {
+    labels
+        .labels()
+        .iter()
+        .map(|&l| l != super::BACKGROUND && l != LabelImage::DONT_CARE)
+        .collect()
+}
+
+/// IoU of two binary masks (1 when both are empty).
+pub fn mask_iou(a: &[bool], b: &[bool]) -> f64 {
+    let (mut inter, mut union) = (0usize, 0usize);
+    for (&x, &y) in a.iter().zip(b) {
+        inter += usize::from(x && y);
+        union += usize::from(x || y);
+    }
+    if union > 0 {
+        inter as f64 / union as f64
+    } else {
+        1.0
+    }
+}
+
+/// Morphological closing (dilation then erosion) of a `w`-wide mask by a disk of radius `r`
+/// pixels: the gaps between leaves filled, the outline kept.
+pub fn close_mask(mask: &[bool], w: usize, r: i64) -> Vec<bool> {
+    let h = mask.len() / w;
+    let disk: Vec<(i64, i64)> = (-r..=r)
+        .flat_map(|dy| (-r..=r).map(move |dx| (dx, dy)))
+        .filter(|(dx, dy)| dx * dx + dy * dy <= r * r)
+        .collect();
+    let morph = |m: &[bool], dilate: bool| -> Vec<bool> {
+        (0..w * h)
+            .map(|i| {
+                let (x, y) = ((i % w) as i64, (i / w) as i64);
+                let hit = |&(dx, dy): &(i64, i64)| {
+                    let (u, v) = (x + dx, y + dy);
+                    // Outside the image counts as background for both steps.
+                    let inside = u >= 0 && v >= 0 && (u as usize) < w && (v as usize) < h;
+                    inside && m[v as usize * w + u as usize]
+                };
+                if dilate {
+                    disk.iter().any(hit)
+                } else {
+                    disk.iter().all(hit)
+                }
+            })
+            .collect()
+    };
+    morph(&morph(mask, true), false)
+}
+
+/// The convex hull of a `w`-wide mask's pixels, filled (pixel centres inside the hull of
+/// the set pixels' corners).
+pub fn hull_mask(mask: &[bool], w: usize) -> Vec<bool> {
+    let h = mask.len() / w;
+    let mut pts: Vec<(f64, f64)> = Vec::new();
+    for (i, _) in mask.iter().enumerate().filter(|(_, m)| **m) {
+        let (x, y) = ((i % w) as f64, (i / w) as f64);
+        pts.extend([(x, y), (x + 1.0, y), (x, y + 1.0), (x + 1.0, y + 1.0)]);
+    }
+    pts.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
+    pts.dedup();
+    if pts.len() < 3 {
+        return vec![false; mask.len()];
+    }
+    let cross = |o: (f64, f64), a: (f64, f64), b: (f64, f64)| {
+        (a.0 - o.0) * (b.1 - o.1) - (a.1 - o.1) * (b.0 - o.0)
+    };
+    // Andrew's monotone chain, counter-clockwise in image coordinates' sense of `cross`.
+    let mut hull: Vec<(f64, f64)> = Vec::new();
+    for pass in 0..2 {
+        let start = hull.len();
+        let iter: Box<dyn Iterator<Item = &(f64, f64)>> = if pass == 0 {
+            Box::new(pts.iter())
+        } else {
+            Box::new(pts.iter().rev())
+        };
+        for &p in iter {
+            while hull.len() >= start + 2
+                && cross(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0
+            {
+                hull.pop();
+            }
+            hull.push(p);
+        }
+        hull.pop();
+    }
+    (0..w * h)
+        .map(|i| {
+            let p = ((i % w) as f64 + 0.5, (i / w) as f64 + 0.5);
+            (0..hull.len()).all(|k| cross(hull[k], hull[(k + 1) % hull.len()], p) >= 0.0)
+        })
+        .collect()
+}
+
+/// Where a photo-view IoU is lost: the fit's and the photo's object masks compared as they
+/// are, with their leaf gaps closed, and as convex hulls; plus each mask's fill (object
+/// pixels over its closed area) and the fit's area over the photo's.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SilhouetteAnalysis {
+    /// The photo-view IoU ([`photo_view_iou`]).
+    pub iou: f64,
+    /// IoU of the two masks closed by a disk ([`close_mask`], radius 1 % of the image height).
+    pub closed_iou: f64,
+    /// IoU of their convex hulls ([`hull_mask`]).
+    pub hull_iou: f64,
+    /// The photo's object pixels over its closed mask's.
+    pub photo_fill: f64,
+    /// The fit's covered pixels over its closed mask's.
+    pub fit_fill: f64,
+    /// The fit's covered pixels over the photo's object pixels.
+    pub area_ratio: f64,
+}
+
+/// [`SilhouetteAnalysis`] of a mesh through `view` against `labels` (the photo's).
+pub fn analyse_silhouette(
+    mesh: &Mesh,
+    view: &View,
+    labels: &LabelImage,
+) -> Result<SilhouetteAnalysis, TreeError> {
+    let fit = coverage_mask(mesh, view)?;
+    let photo = object_mask(labels);
+    let w = view.width as usize;
+    let r = (0.01 * f64::from(view.height)).round().max(1.0) as i64;
+    let (fc, pc) = (close_mask(&fit, w, r), close_mask(&photo, w, r));
+    let count = |m: &[bool]| m.iter().filter(|&&b| b).count() as f64;
+    Ok(SilhouetteAnalysis {
+        iou: mask_iou(&fit, &photo),
+        closed_iou: mask_iou(&fc, &pc),
+        hull_iou: mask_iou(&hull_mask(&fit, w), &hull_mask(&photo, w)),
+        photo_fill: count(&photo) / count(&pc).max(1.0),
+        fit_fill: count(&fit) / count(&fc).max(1.0),
+        area_ratio: count(&fit) / count(&photo).max(1.0),
+    })
+}
+
 /// A UV sphere (the baseline: any sphere, the metric normalises it).
 pub fn sphere() -> Mesh {
     uv_sphere(1.0, 24, 48)
@@ -227,6 +375,17 @@ pub fn fit_case(
     budget: Option<usize>,
     options: &PhotoFitOptions,
 ) -> Result<BenchScore, String> {
+    Ok(fit_case_mesh(case, labels, budget, options)?.0)
+}
+
+/// [`fit_case`], also returning the fitted mesh (MEDIUM) and its photo camera, for
+/// [`analyse_silhouette`].
+pub fn fit_case_mesh(
+    case: &BenchCase,
+    labels: &LabelImage,
+    budget: Option<usize>,
+    options: &PhotoFitOptions,
+) -> Result<(BenchScore, Mesh, View), String> {
     let mut f = start_photo_fit_with(labels, 1, budget, None, options).map_err(|e| e.0)?;
     while !f.session.done() {
         f.session.step();
@@ -243,9 +402,10 @@ pub fn fit_case(
     let c = &case.camera;
     let truth_depth = (DVec3::from_array(c.position) - DVec3::from_array(c.target)).length();
     let moved = to_truth_frame(&mesh, &photo_view, fit_depth, &truth_view, truth_depth);
-    Ok(BenchScore {
+    let score = BenchScore {
         similarity,
         iou64: silhouette_iou64(&case.truth, &moved, 128).map_err(|e| e.0)?,
         photo_iou: photo_view_iou(&mesh, &photo_view, &case.labels).map_err(|e| e.0)?,
-    })
+    };
+    Ok((score, mesh, photo_view))
 }

@@ -8,17 +8,19 @@
 //! // A photo: RGBA bytes (width × height × 4), labelled by colour (green → leaf, brown/grey →
 //! // branch); `codes` is the mask step's output (0 background, 128 don't care, else object;
 //! // one byte a pixel) or an empty array to label the whole photo. `quality`: the effort, in
-//! // (0, 16]; 1 is the default 4 608 GA evaluations (`ga_budget_for_quality`). `start`: a
+//! // (0, 16]; 1 is the default 1 152 GA evaluations (`ga_budget_for_quality`). `start`: a
 //! // tree's parameters (Float64Array) to refit from ("Refit from here": its seed is kept, the
-//! // result is never less similar than it), or an empty array to fit from scratch. The photo is labelled with the default colours.
-//! const fit = new TreeFitSession(width, height, rgba, codes, seed, quality, start);
+//! // result is never less similar than it), or an empty array to fit from scratch. `fovY`:
+//! // the photo's vertical field of view in radians (`fovFromFocal35mm` of its EXIF focal
+//! // length), or 0 when unknown (the fit's default). The photo is labelled with the default colours.
+//! const fit = new TreeFitSession(width, height, rgba, codes, seed, quality, start, fovY);
 //! // Or a label image: 0 background, 1 branch, 2 leaf, 255 don't care — such as the labels of
 //! // a photo under other colour rules: `colors` is an object of `ColorThresholds`' camelCase
 //! // fields (any left out keep their defaults: `{ leafHue: [330, 170], restAsBranch: true }`)
 //! // or undefined for the defaults.
 //! const defaults = treeColorDefaults(); // ColorThresholds::default() as such an object
 //! const labels = treeLabels(width, height, rgba, codes, colors); // also what the page shows
-//! const fit = TreeFitSession.fromLabels(width, height, labels, seed, quality, start);
+//! const fit = TreeFitSession.fromLabels(width, height, labels, seed, quality, start, fovY);
 //! // Both throw an Error with a sentence for a mask with no tree, no leaves or no branches,
 //! // or a start that is not a tree's parameters.
 //! const p = fit.step(); // one GA generation (or the seed trials, or a local-search round)
@@ -42,7 +44,8 @@ use super::js;
 use crate::generators::Generator;
 use crate::mask::LabelImage;
 use crate::tree::impostor::{
-    Framing, PhotoTreeFit, TreeSession, ga_budget_for_quality, start_photo_fit,
+    Framing, PhotoFitOptions, PhotoTreeFit, TreeSession, ga_budget_for_quality,
+    start_photo_fit_with,
 };
 use crate::tree::labels::{ColorThresholds, apply_mask_codes, labels_from_rgb, labels_from_values};
 use wasm_bindgen::prelude::*;
@@ -93,12 +96,18 @@ impl TreeFitSession {
         seed: u32,
         quality: f64,
         start: &[f64],
+        fov_y: f64,
     ) -> Result<TreeFitSession, JsError> {
         let start = (!start.is_empty()).then_some(start);
         // The core's policy turns the effort into GA evaluations, as for the CLI.
         let budget = ga_budget_for_quality(quality).map_err(js)?;
+        // 0 (or anything not positive): the photo's field of view is unknown.
+        let options = PhotoFitOptions {
+            fov_y: (fov_y > 0.0).then_some(fov_y),
+            ..PhotoFitOptions::default()
+        };
         let PhotoTreeFit { session, framing } =
-            start_photo_fit(labels, u64::from(seed), budget, start).map_err(js)?;
+            start_photo_fit_with(labels, u64::from(seed), budget, start, &options).map_err(js)?;
         Ok(TreeFitSession {
             session,
             framing,
@@ -160,9 +169,14 @@ fn photo_labels(
 
 #[wasm_bindgen]
 impl TreeFitSession {
-    /// Starts a fit to a photo, from the tree `start` unless it is empty (see the module
-    /// doc); nothing is evaluated yet.
+    /// Starts a fit to a photo, from the tree `start` unless it is empty, through the
+    /// photo's field of view `fov_y` (radians; 0 when unknown) (see the module doc); nothing
+    /// is evaluated yet.
     #[wasm_bindgen(constructor)]
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "the JS constructor takes flat values, as the module doc lists them"
+    )]
     pub fn new(
         width: u32,
         height: u32,
@@ -171,16 +185,19 @@ impl TreeFitSession {
         seed: u32,
         quality: f64,
         start: &[f64],
+        fov_y: f64,
     ) -> Result<TreeFitSession, JsError> {
         TreeFitSession::start(
             &photo_labels(width, height, rgba, codes, JsValue::UNDEFINED)?,
             seed,
             quality,
             start,
+            fov_y,
         )
     }
 
-    /// Starts a fit to a label image (0 background, 1 branch, 2 leaf, 255 don't care).
+    /// Starts a fit to a label image (0 background, 1 branch, 2 leaf, 255 don't care), seen
+    /// through the field of view `fov_y` (radians; 0 when unknown).
     #[wasm_bindgen(js_name = fromLabels)]
     pub fn from_labels(
         width: u32,
@@ -189,9 +206,10 @@ impl TreeFitSession {
         seed: u32,
         quality: f64,
         start: &[f64],
+        fov_y: f64,
     ) -> Result<TreeFitSession, JsError> {
         let labels = labels_from_values(width, height, labels.to_vec()).map_err(js)?;
-        TreeFitSession::start(&labels, seed, quality, start)
+        TreeFitSession::start(&labels, seed, quality, start, fov_y)
     }
 
     /// One bounded slice of work; returns where the fit stands.
