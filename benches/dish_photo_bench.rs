@@ -13,7 +13,8 @@
 //! those cases; `-- --dir DIR` reads another folder; `-- --save DIR` writes each case's
 //! automatic mask there (`NAME-auto.png`, the hard cut) beside the true one (`NAME-true.png`).
 
-use procfit::dish_photo_bench::{BenchCase, auto_segmentation, case_dirs, fit_case, truth_check};
+use procfit::bench_cases::case_dirs;
+use procfit::dish_photo_bench::{BenchCase, auto_segmentation, fit_case, truth_check};
 use std::path::PathBuf;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -41,15 +42,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             _ => {}
         }
     }
-    let dirs: Vec<_> = case_dirs(&dir)
-        .into_iter()
-        .filter(|d| {
-            names.is_empty()
-                || names
-                    .iter()
-                    .any(|n| d.file_name().is_some_and(|f| f == n.as_str()))
-        })
-        .collect();
+    let dirs = case_dirs(&dir, &names);
     if dirs.is_empty() {
         println!(
             "no dish photo benchmark cases in {}: run `python3 scripts/make-dish-photo-bench.py` first (needs `pip install mitsuba`)",

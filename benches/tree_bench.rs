@@ -12,9 +12,9 @@
 //! adds a table of where the photo-view IoU is lost ([`analyse_silhouette`]: as is, leaf gaps
 //! closed, convex hulls, fills, area ratio) for each fit, the truth and the other seed.
 
+use procfit::bench_cases::case_dirs;
 use procfit::tree::bench::{
-    BenchCase, SilhouetteAnalysis, analyse_silhouette, case_dirs, crown_ellipsoid, fit_case_mesh,
-    sphere,
+    BenchCase, SilhouetteAnalysis, analyse_silhouette, crown_ellipsoid, fit_case_mesh, sphere,
 };
 use procfit::tree::impostor::{PhotoFitOptions, silhouette_iou64};
 use procfit::tree::labels::{ColorThresholds, foliage_problem, photo_labels};
@@ -50,15 +50,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             _ => {}
         }
     }
-    let dirs: Vec<_> = case_dirs(&dir)
-        .into_iter()
-        .filter(|d| {
-            names.is_empty()
-                || names
-                    .iter()
-                    .any(|n| d.file_name().is_some_and(|f| f == n.as_str()))
-        })
-        .collect();
+    let dirs = case_dirs(&dir, &names);
     if dirs.is_empty() {
         println!(
             "no tree benchmark cases in {}: run `node scripts/make-tree-bench.mjs` first",

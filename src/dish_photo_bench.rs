@@ -30,7 +30,7 @@ use crate::reconstruct::{FitConfig, FitError, Session, eval, iou64};
 use crate::segment::{self, Photo};
 use glam::{DVec3, Vec3};
 use serde::Deserialize;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// The photo's camera and what the case is, as the script wrote it (`camera.json`; the
 /// scene's frame: metres, Y up, the table at y = 0).
@@ -153,20 +153,6 @@ pub fn photo_view(camera: &BenchCamera) -> Result<View, FitError> {
     };
     view.params.validate().map_err(e)?;
     Ok(view)
-}
-
-/// Lists the case folders under `root` (those with a `camera.json`), sorted by name; empty when
-/// `root` does not exist.
-pub fn case_dirs(root: &Path) -> Vec<PathBuf> {
-    let mut dirs: Vec<_> = std::fs::read_dir(root)
-        .into_iter()
-        .flatten()
-        .flatten()
-        .map(|e| e.path())
-        .filter(|p| p.join("camera.json").is_file())
-        .collect();
-    dirs.sort();
-    dirs
 }
 
 /// Moves a model seen through `fitted` (its object transform and camera) into the frame of

@@ -10,6 +10,7 @@
 
 pub use procfit_generators as generators;
 
+pub mod bench_cases;
 pub mod building_bench;
 pub mod camera;
 pub mod colors;

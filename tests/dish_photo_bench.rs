@@ -11,10 +11,10 @@
 )]
 
 use glam::{DVec3, Vec3};
+use procfit::bench_cases::case_dirs;
 use procfit::camera::{CameraPose, View, ViewParams};
 use procfit::dish_photo_bench::{
-    BenchCamera, BenchCase, binary_iou, case_dirs, fit_case, photo_view, to_photo_frame,
-    truth_check,
+    BenchCamera, BenchCase, binary_iou, fit_case, photo_view, to_photo_frame, truth_check,
 };
 use procfit::generators::{Generator, Lod, Mesh, dish::Dish};
 use procfit::reconstruct::{iou64, render_coverage};
@@ -173,11 +173,11 @@ fn write_case(dir: &std::path::Path, truth: &Mesh, cam: &BenchCamera) {
 fn a_case_loads_and_the_cli_pipeline_scores_it() {
     let root: PathBuf =
         std::env::temp_dir().join(format!("procfit-dish-bench-{}", std::process::id()));
-    assert!(case_dirs(&root.join("absent")).is_empty());
+    assert!(case_dirs(&root.join("absent"), &[]).is_empty());
     let truth = cup();
     let cam = camera(&truth);
     write_case(&root.join("test-cup"), &truth, &cam);
-    let dirs = case_dirs(&root);
+    let dirs = case_dirs(&root, &[]);
     assert_eq!(dirs.len(), 1);
     let case = BenchCase::load(&dirs[0]).unwrap();
     assert_eq!(case.camera.name, "test-cup");

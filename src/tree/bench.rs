@@ -134,19 +134,6 @@ impl BenchCase {
     }
 }
 
-/// Lists the case folders under `root` (those with a `camera.json`), sorted by name.
-pub fn case_dirs(root: &Path) -> Vec<std::path::PathBuf> {
-    let mut dirs: Vec<_> = std::fs::read_dir(root)
-        .into_iter()
-        .flatten()
-        .flatten()
-        .map(|e| e.path())
-        .filter(|p| p.join("camera.json").is_file())
-        .collect();
-    dirs.sort();
-    dirs
-}
-
 /// Moves a mesh seen by `from` (a camera in its frame) into the frame of `to`, a camera of the
 /// same photo in another frame: the similarity that maps `from`'s pose onto `to`'s, scaled by
 /// the ratio of their distances to what they look at (`from_depth`, `to_depth`).
