@@ -80,8 +80,8 @@ pub struct Session {
     runs: Vec<Run>,
     /// Each finished run's result and last progress.
     finished: Vec<Option<(FitResult, Progress)>>,
-    /// The best finished run ([`pick`]): its index, its result and its last progress.
-    best: Option<(usize, FitResult, Progress)>,
+    /// The best finished run ([`pick`]), an index into `finished`.
+    best: Option<usize>,
 }
 
 /// The run a fit keeps among the finished ones: the lowest final loss, except that among the
@@ -164,18 +164,13 @@ impl Session {
                 p.done.then_some(p)
             })
             .collect();
-        let mut changed = false;
         for (k, last) in finished.into_iter().enumerate() {
             let Some(last) = last else { continue };
             if let Ok(result) = self.runs[k].result() {
                 self.finished[k] = Some((result, last));
-                changed = true;
             }
         }
-        if changed {
-            self.best =
-                pick(&self.finished).and_then(|k| self.finished[k].clone().map(|(r, p)| (k, r, p)));
-        }
+        self.best = pick(&self.finished);
         self.progress()
     }
 
@@ -215,7 +210,7 @@ impl Session {
             })
             .sum::<f64>()
             .min(p.work_total);
-        if let Some((_, _, best)) = &self.best {
+        if let Some((_, best)) = self.best_finished() {
             p.generator = best.generator;
             p.params = best.params.clone();
             p.cameras = best.cameras.clone();
@@ -230,8 +225,8 @@ impl Session {
     /// [`PREVIEW_SIDE`] a side, for a page to draw (`None` before anything was evaluated). It is
     /// rendered on each call, so a caller that does not show it (the CLI) does not pay for it.
     pub fn preview(&self) -> Option<Mask> {
-        match &self.best {
-            Some((k, _, _)) => self.runs[*k].preview(),
+        match self.best {
+            Some(k) => self.runs[k].preview(),
             None => self.runs[self.lead()].preview(),
         }
     }
@@ -241,8 +236,8 @@ impl Session {
     /// evaluated.
     pub fn result(&self) -> Result<FitResult, FitError> {
         let evaluations = self.runs.iter().map(|r| r.evaluations).sum();
-        match &self.best {
-            Some((_, r, _)) => Ok(r.clone()),
+        match self.best_finished() {
+            Some((r, _)) => Ok(r.clone()),
             None => self.runs[self.lead()].result(),
         }
         .map(|mut r| {
@@ -251,6 +246,11 @@ impl Session {
             r.model.seed = Some(self.config.seed);
             r
         })
+    }
+
+    /// The best finished run's result and last progress.
+    fn best_finished(&self) -> Option<&(FitResult, Progress)> {
+        self.finished.get(self.best?)?.as_ref()
     }
 
     /// The fields of view used for the views.
