@@ -20,7 +20,9 @@ fn scratch(name: &str) -> PathBuf {
 /// A photo-like PNG of the mug preset: `procfit render`'s silhouette painted brown with a
 /// little texture over a light, slightly graded background.
 fn mug_photo(name: &str) -> PathBuf {
-    let cam = scratch("cam.json");
+    // One camera file per photo: the tests run in parallel, and a shared file can be read
+    // while another test is rewriting it (an empty read, seen on CI).
+    let cam = scratch(&format!("{name}.cam.json"));
     std::fs::write(
         &cam,
         r#"{"yaw": 0.4, "pitch": 0.35, "ty": -0.2, "fov_y": 0.5}"#,
