@@ -273,9 +273,13 @@ impl Run {
             self.evaluations += spent;
             // Most of the sweep's evaluations carry a gradient (the repairs).
             self.work_done += 1.75 * spent as f64 * work_weight(side);
+            // The sweep's result replaces the last of the best few, not a structure's probe.
+            let had = starts.len();
             starts.retain(|s| *s != x);
             starts.insert(0, x);
-            starts.truncate(PROBES);
+            if starts.len() > had && had >= PROBES {
+                starts.remove(PROBES);
+            }
         }
         self.phase = self.start_adam(2, starts[0].clone());
         if let Phase::Adam(stage) = &mut self.phase {
