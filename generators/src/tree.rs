@@ -1279,3 +1279,42 @@ mod tests {
         }
     }
 }
+
+#[cfg(test)]
+mod homogeneity {
+    use super::*;
+
+    /// The height gene scales the whole tree: every length follows it, so the tree at height
+    /// `s·h` is the tree at `h` scaled by `s` about its base (the photo fit's area framing
+    /// relies on it, `src/tree/impostor.rs`).
+    #[test]
+    fn height_scales_the_whole_tree() {
+        for preset in TreeGenerator.presets() {
+            for s in [0.7, 1.3] {
+                let spec = &TreeGenerator.params()[idx::HEIGHT];
+                if !(spec.min..=spec.max).contains(&(preset.values[idx::HEIGHT] * s)) {
+                    continue; // out of range heights are clamped, not scaled
+                }
+                let a = TreeGenerator
+                    .generate(&preset.values, Lod::Low)
+                    .expect("tree");
+                let mut p = preset.values.clone();
+                p[idx::HEIGHT] *= s;
+                let b = TreeGenerator.generate(&p, Lod::Low).expect("tree");
+                assert_eq!(a.positions.len(), b.positions.len(), "{}", preset.name);
+                let worst = a
+                    .positions
+                    .iter()
+                    .zip(&b.positions)
+                    .map(|(pa, pb)| (*pa * s as f32 - *pb).length())
+                    .fold(0.0f32, f32::max);
+                eprintln!("{} ×{s}: worst {worst}", preset.name);
+                assert!(
+                    worst < 1e-3 * p[idx::HEIGHT] as f32,
+                    "{}: {worst}",
+                    preset.name
+                );
+            }
+        }
+    }
+}

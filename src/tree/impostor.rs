@@ -22,7 +22,7 @@ use crate::generators::tree::{LEAF_CARD_TRIANGLES, PART_LEAF, TreeGenerator, idx
 use crate::generators::{Generator, Lod, Mesh};
 use crate::mask::LabelImage;
 use crate::render::{Renderer, Topology};
-use glam::DVec3;
+use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use std::sync::Mutex;
 
@@ -48,6 +48,9 @@ impl From<crate::camera::CameraError> for TreeError {
 pub struct TreeImpostor {
     view: View,
     renderer: Renderer,
+    /// A renderer at half the size, for [`TreeImpostor::render_framed`]'s area estimate
+    /// (made on first use).
+    half: Option<(View, Renderer)>,
     leaf: Vec<f32>,
     wood_tris: Vec<[u32; 3]>,
     leaf_tris: Vec<[u32; 3]>,
@@ -60,6 +63,7 @@ impl TreeImpostor {
         Ok(TreeImpostor {
             view,
             renderer: Renderer::new(view.width, view.height)?,
+            half: None,
             leaf: Vec::new(),
             wood_tris: Vec::new(),
             leaf_tris: Vec::new(),
@@ -74,6 +78,30 @@ impl TreeImpostor {
     /// The label image ([`BACKGROUND`], [`BRANCH`], [`LEAF`]) of a tree mesh whose parts are
     /// the tree generator's (`trunk`, `branch`, `leaf`).
     pub fn render(&mut self, mesh: &Mesh) -> Result<LabelImage, TreeError> {
+        Ok(self.render_with(mesh, None)?.1)
+    }
+
+    /// The label image of the tree scaled about its foot (the origin) by the factor `frame`
+    /// picks from the tree's area: its tree pixels at this view's size, estimated from a
+    /// render at half the size. Returns the factor and the image. Scaling through the view's
+    /// object scale gives the image of the tree generated `scale` times taller (the height
+    /// gene scales every length: `height_scales_the_whole_tree` in the generator), without
+    /// generating it again, and the half-size estimate costs about a quarter of a full render:
+    /// the photo fit's area framing ([`TreeFitConfig::area_framing`]) at about half the cost
+    /// of rendering the tree twice.
+    pub fn render_framed(
+        &mut self,
+        mesh: &Mesh,
+        frame: &dyn Fn(f64) -> f64,
+    ) -> Result<(f64, LabelImage), TreeError> {
+        self.render_with(mesh, Some(frame))
+    }
+
+    fn render_with(
+        &mut self,
+        mesh: &Mesh,
+        frame: Option<&dyn Fn(f64) -> f64>,
+    ) -> Result<(f64, LabelImage), TreeError> {
         self.wood_tris.clear();
         self.leaf_tris.clear();
         let mut leaf_index = 0;
@@ -92,15 +120,19 @@ impl TreeImpostor {
         let n = mesh.positions.len();
         let leaf_topo = Topology::new(&self.leaf_tris, n)?;
         let wood_topo = Topology::new(&self.wood_tris, n)?;
+        let scale = match frame {
+            Some(frame) => frame(self.half_area(&leaf_topo, &wood_topo, &mesh.positions)?),
+            None => 1.0,
+        };
+        if !(scale.is_finite() && scale > 0.0) {
+            return Err(TreeError(format!("framing scale {scale} is not positive")));
+        }
+        let mut view = self.view;
+        view.params.scale *= scale;
         self.leaf.clear();
-        self.leaf.extend_from_slice(self.renderer.forward(
-            &leaf_topo,
-            &mesh.positions,
-            &self.view,
-        )?);
-        let wood = self
-            .renderer
-            .forward(&wood_topo, &mesh.positions, &self.view)?;
+        self.leaf
+            .extend_from_slice(self.renderer.forward(&leaf_topo, &mesh.positions, &view)?);
+        let wood = self.renderer.forward(&wood_topo, &mesh.positions, &view)?;
         let labels = self
             .leaf
             .iter()
@@ -115,7 +147,44 @@ impl TreeImpostor {
                 }
             })
             .collect();
-        Ok(LabelImage::new(self.view.width, self.view.height, labels)?)
+        Ok((
+            scale,
+            LabelImage::new(self.view.width, self.view.height, labels)?,
+        ))
+    }
+
+    /// The tree's covered area in pixels of this view, from the leaf and wood coverage at half
+    /// the size.
+    fn half_area(
+        &mut self,
+        leaf_topo: &Topology,
+        wood_topo: &Topology,
+        positions: &[Vec3],
+    ) -> Result<f64, TreeError> {
+        if self.half.is_none() {
+            let view = View {
+                width: (self.view.width / 2).max(1),
+                height: (self.view.height / 2).max(1),
+                ..self.view
+            };
+            self.half = Some((view, Renderer::new(view.width, view.height)?));
+        }
+        let Some((view, renderer)) = self.half.as_mut() else {
+            return Err(TreeError("no half-size renderer".into()));
+        };
+        self.leaf.clear();
+        self.leaf
+            .extend_from_slice(renderer.forward(leaf_topo, positions, view)?);
+        let wood = renderer.forward(wood_topo, positions, view)?;
+        let covered: f64 = self
+            .leaf
+            .iter()
+            .zip(wood)
+            .map(|(&l, &w)| f64::from(l.max(w).min(1.0)))
+            .sum();
+        let ratio = f64::from(self.view.width) * f64::from(self.view.height)
+            / (f64::from(view.width) * f64::from(view.height));
+        Ok(covered * ratio)
     }
 }
 
@@ -275,36 +344,48 @@ impl Evaluator {
     /// follows) so that its tree pixels cover as many pixels as the reference's.
     fn tree(&self, genome: &[f64], seed: Option<u32>) -> Result<(Vec<f64>, LabelImage), TreeError> {
         let mut params = Self::params(genome, seed)?;
-        let labels = self.label_image(&params)?;
         if !self.cfg.area_framing || self.area == 0 {
-            return Ok((params, labels));
-        }
-        let area = labels
-            .labels()
-            .iter()
-            .filter(|&&l| l == BRANCH || l == LEAF)
-            .count();
-        // The area grows with the square of the size.
-        let scale = (self.area as f64 / area.max(1) as f64)
-            .sqrt()
-            .clamp(1.0 / MAX_AREA_SCALE, MAX_AREA_SCALE);
-        if (scale - 1.0).abs() < 0.01 {
+            let labels = self.label_image(&params)?;
             return Ok((params, labels));
         }
         let spec = &TreeGenerator.params()[idx::HEIGHT];
-        params[idx::HEIGHT] = (params[idx::HEIGHT] * scale).clamp(spec.min, spec.max);
-        let labels = self.label_image(&params)?;
+        let height = params[idx::HEIGHT];
+        let frame = |area: f64| {
+            // The area grows with the square of the size.
+            let scale = (self.area as f64 / area.max(1.0))
+                .sqrt()
+                .clamp(1.0 / MAX_AREA_SCALE, MAX_AREA_SCALE);
+            if (scale - 1.0).abs() < 0.01 {
+                1.0
+            } else {
+                (height * scale).clamp(spec.min, spec.max) / height
+            }
+        };
+        let (scale, labels) = self.with_impostor(|imp| {
+            let mesh = TreeGenerator.generate(&params, self.cfg.lod)?;
+            imp.render_framed(&mesh, &frame)
+        })?;
+        if scale != 1.0 {
+            params[idx::HEIGHT] = (height * scale).clamp(spec.min, spec.max);
+        }
         Ok((params, labels))
     }
 
     fn label_image(&self, params: &[f64]) -> Result<LabelImage, TreeError> {
+        self.with_impostor(|imp| imp.render(&TreeGenerator.generate(params, self.cfg.lod)?))
+    }
+
+    /// Runs `f` with this thread's impostor renderer.
+    fn with_impostor<T>(
+        &self,
+        f: impl FnOnce(&mut TreeImpostor) -> Result<T, TreeError>,
+    ) -> Result<T, TreeError> {
         let slots = self.impostors.len();
         let slot = rayon::current_thread_index().map_or(slots - 1, |i| i.min(slots - 2));
         let mut imp = self.impostors[slot]
             .lock()
             .map_err(|_| TreeError("an impostor renderer was poisoned".into()))?;
-        let mesh = TreeGenerator.generate(params, self.cfg.lod)?;
-        imp.render(&mesh)
+        f(&mut imp)
     }
 
     /// Tree similarity of the genome's impostor to the reference (0 when it cannot be built).
