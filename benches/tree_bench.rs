@@ -7,7 +7,8 @@
 //! baselines: a sphere, an ellipsoid on the truth's crown box, the same species another seed.
 //!
 //! `cargo bench --bench tree_bench` fits the colour photo (labelled as the CLI does);
-//! `-- --labels` fits the true label image too; `-- --quick` cuts the GA budget (`PHOTO_GA_BUDGET`) by 4;
+//! `-- --labels` fits the true label image too; `-- --quick` cuts the GA budget (`PHOTO_GA_BUDGET`) by 4,
+//! `-- --budget N` sets it;
 //! `-- NAME …` runs only those cases; `-- --dir DIR` reads another folder; `-- --analyse`
 //! adds a table of where the photo-view IoU is lost ([`analyse_silhouette`]: as is, leaf gaps
 //! closed, convex hulls, fills, area ratio) for each fit, the truth and the other seed.
@@ -34,6 +35,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let no_envelope = args.iter().any(|a| a == "--no-envelope");
     let no_area = args.iter().any(|a| a == "--no-area");
     let mut weight = None;
+    let mut budget_arg: Option<usize> = None;
     let mut analyses: Vec<(String, &str, SilhouetteAnalysis)> = Vec::new();
     let mut dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/tree-bench");
     let mut names = Vec::new();
@@ -43,6 +45,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "--dir" => dir = PathBuf::from(it.next().ok_or("--dir needs a folder")?),
             "--weight" => {
                 weight = Some(it.next().ok_or("--weight needs a number")?.parse::<f64>()?)
+            }
+            "--budget" => {
+                budget_arg = Some(it.next().ok_or("--budget needs a number")?.parse::<usize>()?)
             }
             "--bench" | "--quick" | "--labels" | "--paper" | "--no-fov" | "--analyse"
             | "--no-envelope" | "--no-area" => {}
@@ -58,12 +63,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
         return Ok(());
     }
-    let budget = quick.then_some(procfit::tree::impostor::PHOTO_GA_BUDGET / 4);
+    let budget = budget_arg.or(quick.then_some(procfit::tree::impostor::PHOTO_GA_BUDGET / 4));
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
     println!(
         "## Independent tree benchmark (ez-tree), {} cases, 2 threads{}\n",
         dirs.len(),
-        if quick { ", quarter budget" } else { "" }
+        match budget {
+            Some(b) => format!(", GA budget {b}"),
+            None => String::new(),
+        }
     );
     println!(
         "| tree | kind | input | similarity | IoU-64 | photo-view IoU | seconds | sphere | crown ellipsoid | other seed |"
