@@ -37,6 +37,7 @@ pub mod gmm;
 pub mod grabcut;
 pub mod maxflow;
 pub mod morph;
+pub mod plausible;
 pub mod windows;
 
 use std::fmt;
