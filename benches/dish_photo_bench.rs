@@ -34,6 +34,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     while let Some(a) = it.next() {
         match a.as_str() {
             "--dir" => dir = PathBuf::from(it.next().ok_or("--dir needs a folder")?),
+            // Read again by the `--masks` branch.
+            "--check" => {
+                it.next();
+            }
             "--save" => save = Some(PathBuf::from(it.next().ok_or("--save needs a folder")?)),
             "--threads" => threads = it.next().ok_or("--threads needs a number")?.parse()?,
             "--fov" => {

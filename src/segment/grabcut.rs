@@ -27,6 +27,7 @@ use super::decode::area_resample;
 use super::gmm::{Gmm, Rgb};
 use super::maxflow::Graph;
 use super::morph;
+use super::plausible::doubt as plausible_doubt;
 use super::{BBox, Label, Photo, SegmentError, Segmentation, Stroke};
 use crate::mask::Mask;
 
@@ -567,6 +568,16 @@ impl Session {
                 "the image border is not one background: it differs on two or more sides"
                     .to_owned(),
             );
+        }
+        // The cut's own colour models vouch for a mask that took in table: judge it against
+        // the photo around it instead. Only for the automatic mask; a mask the user has
+        // edited is theirs.
+        if self.crossed.is_some() && warnings.is_empty() {
+            if let Some(doubt) =
+                super::plausible::assess(&self.colors, &obj, w, h).and_then(|p| plausible_doubt(&p))
+            {
+                warnings.push(doubt);
+            }
         }
         // Confidence: how often the cut agrees with the colour models alone, near the object
         // (its box grown by half its size on each side), object and background pixels weighted
