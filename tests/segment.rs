@@ -1461,7 +1461,6 @@ fn a_photo_cropped_to_its_object_is_flagged() {
 #[test]
 fn the_wall_brush_erases_windows_and_nothing_else() {
     use procfit::mask::LabelImage;
-    use procfit::segment::plausible;
     use procfit::segment::windows::{LABEL_FACADE, erase_windows};
     // A 20×10 façade with two windows; a stroke over the left one only.
     let (w, h) = (20u32, 10u32);

@@ -172,9 +172,9 @@ impl Gmm {
 /// [`Gmm::nll_shaded`] to shade it: a wooden table has ≈ 0.4, a white or grey wall below 0.05.
 pub const SHADE_MIN_CHROMA: f32 = 0.15;
 /// The range of the log-chroma stretch of a shade (1 = the colour's own hue strength).
-const SHADE_SATURATION: [f32; 2] = [0.8, 2.2];
+pub const SHADE_SATURATION: [f32; 2] = [0.8, 2.2];
 /// Prior cost (nats) of explaining a colour as shaded rather than as it is.
-const SHADE_PENALTY: f32 = 2.0;
+pub const SHADE_PENALTY: f32 = 2.0;
 
 impl Component {
     fn log_density(&self, c: &Rgb) -> f32 {

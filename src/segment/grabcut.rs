@@ -572,12 +572,12 @@ impl Session {
         // The cut's own colour models vouch for a mask that took in table: judge it against
         // the photo around it instead. Only for the automatic mask; a mask the user has
         // edited is theirs.
-        if self.crossed.is_some() && warnings.is_empty() {
-            if let Some(doubt) =
+        if self.crossed.is_some()
+            && warnings.is_empty()
+            && let Some(doubt) =
                 super::plausible::assess(&self.colors, &obj, w, h).and_then(|p| plausible_doubt(&p))
-            {
-                warnings.push(doubt);
-            }
+        {
+            warnings.push(doubt);
         }
         // Confidence: how often the cut agrees with the colour models alone, near the object
         // (its box grown by half its size on each side), object and background pixels weighted
