@@ -11,11 +11,16 @@
 //! `cargo bench --bench dish_photo_bench` runs everything; `-- --quick` at quality 0.4;
 //! `-- --fov known` or `-- --fov unknown` only that row; `-- --threads N`; `-- NAME …` only
 //! those cases; `-- --dir DIR` reads another folder; `-- --save DIR` writes each case's
-//! automatic mask there (`NAME-auto.png`, the hard cut) beside the true one (`NAME-true.png`).
+//! automatic mask there (`NAME-auto.png`, the hard cut) beside the true one (`NAME-true.png`);
+//! `-- --masks` only segments (no fits): mask IoU, the share of extra and missing area, the
+//! segmentation time (median of 5, one thread), confidence and warnings, and the mask
+//! plausibility measures ([`procfit::segment::plausible`]) of the automatic mask, of the true
+//! one and, with `-- --check DIR`, of the masks `DIR/NAME-auto.png` (say, an older version's).
 
 use procfit::bench_cases::case_dirs;
 use procfit::dish_photo_bench::{BenchCase, auto_segmentation, fit_case, truth_check};
-use std::path::PathBuf;
+use procfit::segment::{Photo, plausible};
+use std::path::{Path, PathBuf};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -29,6 +34,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     while let Some(a) = it.next() {
         match a.as_str() {
             "--dir" => dir = PathBuf::from(it.next().ok_or("--dir needs a folder")?),
+            // Read again by the `--masks` branch.
+            "--check" => {
+                it.next();
+            }
             "--save" => save = Some(PathBuf::from(it.next().ok_or("--save needs a folder")?)),
             "--threads" => threads = it.next().ok_or("--threads needs a number")?.parse()?,
             "--fov" => {
@@ -49,6 +58,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             dir.display()
         );
         return Ok(());
+    }
+    if args.iter().any(|a| a == "--masks") {
+        let check = args
+            .iter()
+            .position(|a| a == "--check")
+            .and_then(|k| args.get(k + 1))
+            .map(PathBuf::from);
+        return masks_only(&dirs, save.as_deref(), check.as_deref());
     }
     let quality = if quick { 0.4 } else { 1.0 };
     let pool = rayon::ThreadPoolBuilder::new()
@@ -150,5 +167,102 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             println!("{n}");
         }
     }
+    Ok(())
+}
+
+/// `--masks`: the automatic masks alone, scored against the true visible masks.
+fn masks_only(
+    dirs: &[PathBuf],
+    save: Option<&Path>,
+    check: Option<&Path>,
+) -> Result<(), Box<dyn std::error::Error>> {
+    println!(
+        "| case | mask IoU | extra | missing | segment ms | confidence | overlap / edges: auto | true | checked (IoU) | warnings |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|");
+    let (mut iou_sum, mut ms_sum) = (0.0, 0.0);
+    for d in dirs {
+        let case = BenchCase::load(d)?;
+        let mut times = Vec::new();
+        let mut seg = None;
+        for _ in 0..5 {
+            let t = std::time::Instant::now();
+            seg = Some(auto_segmentation(&case)?);
+            times.push(t.elapsed().as_secs_f64() * 1000.0);
+        }
+        times.sort_by(f64::total_cmp);
+        let seg = seg.ok_or("no segmentation")?;
+        if let Some(out) = save {
+            std::fs::create_dir_all(out)?;
+            let luma = seg
+                .object
+                .values()
+                .iter()
+                .map(|&v| (v.clamp(0.0, 1.0) * 255.0) as u8)
+                .collect();
+            image::GrayImage::from_raw(seg.object.width(), seg.object.height(), luma)
+                .ok_or("bad mask size")?
+                .save(out.join(format!("{}-auto.png", case.camera.name)))?;
+        }
+        let iou = procfit::dish_photo_bench::binary_iou(&seg.object, &case.mask);
+        let (mut extra, mut missing, mut truth) = (0usize, 0usize, 0usize);
+        for (&a, &t) in seg.object.values().iter().zip(case.mask.values()) {
+            let (a, t) = (a >= 0.5, t >= 0.5);
+            truth += usize::from(t);
+            extra += usize::from(a && !t);
+            missing += usize::from(t && !a);
+        }
+        let pct = |k: usize| 100.0 * k as f64 / truth.max(1) as f64;
+        let photo = Photo::decode(&case.photo, procfit::segment::WORKING_SIDE)?;
+        let (w, h) = (photo.width() as usize, photo.height() as usize);
+        let colors = photo.colors();
+        let measure = |m: &procfit::mask::Mask| {
+            let obj: Vec<bool> = m.values().iter().map(|&v| v >= 0.5).collect();
+            match plausible::assess(&colors, &obj, w, h) {
+                Some(p) => format!(
+                    "{:.2} / {:.2}{}",
+                    p.overlap,
+                    p.edge_support,
+                    if plausible::doubt(&p).is_some() {
+                        " ⚠"
+                    } else {
+                        ""
+                    }
+                ),
+                None => "–".into(),
+            }
+        };
+        let checked = match check {
+            Some(dir) => {
+                let bytes = std::fs::read(dir.join(format!("{}-auto.png", case.camera.name)))?;
+                let old = procfit::segment::segment_mask_image(&photo, &bytes)?.object;
+                format!(
+                    "{} ({:.3})",
+                    measure(&old),
+                    procfit::dish_photo_bench::binary_iou(&old, &case.mask)
+                )
+            }
+            None => "–".into(),
+        };
+        println!(
+            "| {} | {iou:.3} | {:.1} % | {:.1} % | {:.0} | {:.2} | {} | {} | {checked} | {} |",
+            case.camera.name,
+            pct(extra),
+            pct(missing),
+            times[2],
+            seg.confidence,
+            measure(&seg.object),
+            measure(&case.mask),
+            seg.warnings.join(" / ")
+        );
+        iou_sum += iou;
+        ms_sum += times[2];
+    }
+    let n = dirs.len().max(1) as f64;
+    println!(
+        "| **mean** | {:.3} | | | {:.0} | | |",
+        iou_sum / n,
+        ms_sum / n
+    );
     Ok(())
 }

@@ -25,6 +25,9 @@ struct Component {
     inv: [f32; 9],
     /// log(weight) − ½ log det Σ − 3/2 log 2π: the constant part of the log density.
     log_norm: f32,
+    /// The mean's log colour split into its mean `m` and centred log-chroma `u` (with `u·u`),
+    /// when the hue is strong enough to shade ([`SHADE_MIN_CHROMA`]).
+    log_chroma: Option<(f32, [f32; 3], f32)>,
 }
 
 /// A Gaussian mixture over RGB colours.
@@ -133,7 +136,45 @@ impl Gmm {
         }
         -best
     }
+
+    /// −log p(c) when `c` may also be a shaded copy of a model colour (a table in a soft
+    /// shadow, or farther from the light): the least of [`Gmm::nll`] and, over the components
+    /// whose hue is strong enough to tell a shade of their colour from another colour
+    /// (log-chroma length at least [`SHADE_MIN_CHROMA`]), the component's density at the
+    /// pixel's un-shaded colour plus [`SHADE_PENALTY`]. A shade is the colour darkened or
+    /// brightened by a factor in `[lo, hi]` and its log-chroma stretched by a factor in
+    /// [`SHADE_SATURATION`]: light bounced off the table itself, which fills its shadows,
+    /// has the table's hue, so shadows are deeper in the hue, not only darker. A grey or white
+    /// component is never shaded: a darker grey is as likely a grey object as a shadow.
+    pub fn nll_shaded(&self, c: &Rgb, lo: f32, hi: f32) -> f32 {
+        let mut best = f32::NEG_INFINITY;
+        let lc = c.map(|v| v.max(1.0 / 512.0).ln());
+        let mc = (lc[0] + lc[1] + lc[2]) / 3.0;
+        for comp in &self.comps {
+            best = best.max(comp.log_density(c));
+            let Some((m, u, uu)) = comp.log_chroma else {
+                continue;
+            };
+            // In log RGB the brightness axis (1, 1, 1) and the centred chroma `u` are
+            // orthogonal, so the two factors are found independently, each clamped.
+            let beta = (mc - m).clamp(lo.ln(), hi.ln());
+            let uc = [lc[0] - mc, lc[1] - mc, lc[2] - mc];
+            let gamma = ((uc[0] * u[0] + uc[1] * u[1] + uc[2] * u[2]) / uu)
+                .clamp(SHADE_SATURATION[0], SHADE_SATURATION[1]);
+            let x = [0, 1, 2].map(|k| (lc[k] - beta - (gamma - 1.0) * u[k]).exp());
+            best = best.max(comp.log_density(&x) - SHADE_PENALTY);
+        }
+        -best
+    }
 }
+
+/// Smallest length of a component's centred log colour (its log-chroma) for
+/// [`Gmm::nll_shaded`] to shade it: a wooden table has ≈ 0.4, a white or grey wall below 0.05.
+pub const SHADE_MIN_CHROMA: f32 = 0.15;
+/// The range of the log-chroma stretch of a shade (1 = the colour's own hue strength).
+pub const SHADE_SATURATION: [f32; 2] = [0.8, 2.2];
+/// Prior cost (nats) of explaining a colour as shaded rather than as it is.
+pub const SHADE_PENALTY: f32 = 2.0;
 
 impl Component {
     fn log_density(&self, c: &Rgb) -> f32 {
@@ -175,10 +216,16 @@ fn component(a: &Acc, total: f64) -> Option<Component> {
     let inv = [i00, i01, i02, i01, i11, i12, i02, i12, i22].map(|v| (v / det) as f32);
     let weight = n / total;
     let log_norm = weight.ln() - 0.5 * det.ln() - 1.5 * (2.0 * std::f64::consts::PI).ln();
+    let mean = m.map(|v| v as f32);
+    let lm = mean.map(|v| v.max(1.0 / 512.0).ln());
+    let avg = (lm[0] + lm[1] + lm[2]) / 3.0;
+    let u = lm.map(|v| v - avg);
+    let uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
     Some(Component {
-        mean: m.map(|v| v as f32),
+        mean,
         inv,
         log_norm: log_norm as f32,
+        log_chroma: (uu >= SHADE_MIN_CHROMA * SHADE_MIN_CHROMA).then_some((avg, u, uu)),
     })
 }
 

@@ -27,6 +27,7 @@ use super::decode::area_resample;
 use super::gmm::{Gmm, Rgb};
 use super::maxflow::Graph;
 use super::morph;
+use super::plausible::doubt as plausible_doubt;
 use super::{BBox, Label, Photo, SegmentError, Segmentation, Stroke};
 use crate::mask::Mask;
 
@@ -47,6 +48,15 @@ const TOUCH_FRACTION: f32 = 0.12;
 /// Percentile of the border pixels' own negative log-likelihood above which a pixel's colour is
 /// "not seen on the border".
 const BORDER_PERCENTILE: f32 = 0.97;
+
+/// Radius of the opening that cleans the first object seed (pixels the border does not
+/// explain) of streaks and specks, in pixels of the coarsest image.
+const SEED_OPENING: usize = 1;
+
+/// Brightness factors by which the border's colours may appear elsewhere in the background: a
+/// soft shadow darkens a table to about half, a table darkens or brightens away from or
+/// towards the light (see [`Gmm::nll_shaded`]).
+const SHADE_RANGE: [f32; 2] = [0.4, 1.25];
 
 /// Extra negative log-likelihood allowed when deciding that a colour matches a stroke's.
 const STROKE_MARGIN: f32 = 6.0;
@@ -150,9 +160,13 @@ impl Session {
             Some(coarse) => (0..w * h).map(|i| !is_bg(s.hard[i]) && coarse[i]).collect(),
             None => {
                 let tau = s.border_tau;
-                (0..w * h)
+                let unexplained: Vec<bool> = (0..w * h)
                     .map(|i| !is_bg(s.hard[i]) && s.border_nll[i] > tau)
-                    .collect()
+                    .collect();
+                // A table's grain and a background's odd pixel are streaks and specks that the
+                // border happened not to show; an object is a region. Left in, they teach the
+                // object's colour model the background's colours.
+                morph::open(&unexplained, w, h, SEED_OPENING)
             }
         };
         let iterations = s.opts.iterations;
@@ -267,7 +281,10 @@ impl Session {
         let colors = photo.colors();
         let nlinks = nlinks_of(&colors, w, h);
         let (border_model, border_tau, touched) = border_model(&colors, w, h)?;
-        let border_nll: Vec<f32> = colors.iter().map(|c| border_model.nll(c)).collect();
+        let border_nll: Vec<f32> = colors
+            .iter()
+            .map(|c| border_model.nll_shaded(c, SHADE_RANGE[0], SHADE_RANGE[1]))
+            .collect();
         let empty = Mask::empty(w as u32, h as u32)?;
         Ok(Session {
             w,
@@ -364,6 +381,16 @@ impl Session {
                     _ => {}
                 }
             }
+        }
+        // A thin object (a seed cleaned down to a strip) can fall between the sampling
+        // stride's columns: then every one of its pixels is a sample.
+        if fg_s.is_empty() {
+            fg_s.extend(
+                (0..n)
+                    .filter(|&i| !is_bg(self.hard[i]) && (is_fg(self.hard[i]) || labels[i]))
+                    .take(MAX_SAMPLES)
+                    .map(|i| self.colors[i]),
+            );
         }
 
         let refit = |old: &Option<Gmm>, s: &[Rgb]| match old {
@@ -541,6 +568,16 @@ impl Session {
                 "the image border is not one background: it differs on two or more sides"
                     .to_owned(),
             );
+        }
+        // The cut's own colour models vouch for a mask that took in table: judge it against
+        // the photo around it instead. Only for the automatic mask; a mask the user has
+        // edited is theirs.
+        if self.crossed.is_some()
+            && warnings.is_empty()
+            && let Some(doubt) =
+                super::plausible::assess(&self.colors, &obj, w, h).and_then(|p| plausible_doubt(&p))
+        {
+            warnings.push(doubt);
         }
         // Confidence: how often the cut agrees with the colour models alone, near the object
         // (its box grown by half its size on each side), object and background pixels weighted

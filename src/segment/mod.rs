@@ -23,10 +23,14 @@
 //! - works when the object's colours differ from the background's and the image border shows
 //!   background (plain, gradient, noisy, patterned walls; a table along one side);
 //! - keeps holes that show the background (a handle's loop), fills others;
-//! - fails where object and background share colours (a white cup on a white table), takes a
-//!   cast shadow that is darker than anything on the border for object, and cannot see glass;
-//!   such masks usually come out with a low agreement between cut and colour models, which
-//!   [`Segmentation::warnings`] reports — the user then corrects with strokes or a rectangle.
+//! - takes a shadow or a darker stretch of a coloured table (wood) for background: the border
+//!   model also explains shaded copies of its saturated colours ([`gmm::Gmm::nll_shaded`]);
+//!   on a white or grey table a shadow is as dark as a grey object, and may be taken in;
+//! - fails where object and background share colours (a white cup on a white table), or where
+//!   the object is a darker shade of a coloured table's hue, and cannot see glass;
+//!   such masks usually come out with a low agreement between cut and colour models, or
+//!   [`plausible`] finds them doubtful against the photo around them; either way
+//!   [`Segmentation::warnings`] reports it — the user then corrects with strokes or a rectangle.
 //! - A uniform image, or an object that fills the frame, leaves nothing to learn the
 //!   background from: the result is flagged ([`Segmentation::is_low_confidence`]).
 
@@ -37,6 +41,7 @@ pub mod gmm;
 pub mod grabcut;
 pub mod maxflow;
 pub mod morph;
+pub mod plausible;
 pub mod windows;
 
 use std::fmt;

@@ -130,6 +130,19 @@ pub fn dilate(mask: &[bool], w: usize, h: usize, r: usize) -> Vec<bool> {
     out
 }
 
+/// Square erosion of radius `r`: the pixels whose whole `(2r+1)²` square (clipped to the
+/// image) is set.
+pub fn erode(mask: &[bool], w: usize, h: usize, r: usize) -> Vec<bool> {
+    let inv: Vec<bool> = mask.iter().map(|&m| !m).collect();
+    dilate(&inv, w, h, r).iter().map(|&m| !m).collect()
+}
+
+/// Square opening of radius `r` (erosion, then dilation): removes specks and strands
+/// narrower than `2r + 1` pixels and keeps the rest as it was, up to its corners.
+pub fn open(mask: &[bool], w: usize, h: usize, r: usize) -> Vec<bool> {
+    dilate(&erode(mask, w, h, r), w, h, r)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
