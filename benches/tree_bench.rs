@@ -47,7 +47,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 weight = Some(it.next().ok_or("--weight needs a number")?.parse::<f64>()?)
             }
             "--budget" => {
-                budget_arg = Some(it.next().ok_or("--budget needs a number")?.parse::<usize>()?)
+                budget_arg = Some(
+                    it.next()
+                        .ok_or("--budget needs a number")?
+                        .parse::<usize>()?,
+                )
             }
             "--bench" | "--quick" | "--labels" | "--paper" | "--no-fov" | "--analyse"
             | "--no-envelope" | "--no-area" => {}
