@@ -8,7 +8,7 @@
 //!
 //! `cargo bench --bench tree_bench` fits the colour photo (labelled as the CLI does);
 //! `-- --labels` fits the true label image too; `-- --quick` cuts the GA budget (`PHOTO_GA_BUDGET`) by 4,
-//! `-- --budget N` sets it;
+//! `-- --budget N` sets it, `-- --seed N` the fit's seed (1 by default);
 //! `-- NAME …` runs only those cases; `-- --dir DIR` reads another folder; `-- --analyse`
 //! adds a table of where the photo-view IoU is lost ([`analyse_silhouette`]: as is, leaf gaps
 //! closed, convex hulls, fills, area ratio) for each fit, the truth and the other seed.
@@ -36,6 +36,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let no_area = args.iter().any(|a| a == "--no-area");
     let mut weight = None;
     let mut budget_arg: Option<usize> = None;
+    let mut seed = 1;
     let mut analyses: Vec<(String, &str, SilhouetteAnalysis)> = Vec::new();
     let mut dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/tree-bench");
     let mut names = Vec::new();
@@ -46,6 +47,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "--weight" => {
                 weight = Some(it.next().ok_or("--weight needs a number")?.parse::<f64>()?)
             }
+            "--seed" => seed = it.next().ok_or("--seed needs a number")?.parse::<u64>()?,
             "--budget" => {
                 budget_arg = Some(
                     it.next()
@@ -114,7 +116,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         options.area_framing = false;
                     }
                     let t = std::time::Instant::now();
-                    pool.install(|| fit_case_mesh(&case, labels, budget, &options))
+                    pool.install(|| fit_case_mesh(&case, labels, seed, budget, &options))
                         .map(|(r, mesh, view)| {
                             let seconds = t.elapsed().as_secs_f64();
                             if analyse {

@@ -362,18 +362,19 @@ pub fn fit_case(
     budget: Option<usize>,
     options: &PhotoFitOptions,
 ) -> Result<BenchScore, String> {
-    Ok(fit_case_mesh(case, labels, budget, options)?.0)
+    Ok(fit_case_mesh(case, labels, 1, budget, options)?.0)
 }
 
-/// [`fit_case`], also returning the fitted mesh (MEDIUM) and its photo camera, for
-/// [`analyse_silhouette`].
+/// [`fit_case`] with the fit's seed, also returning the fitted mesh (MEDIUM) and its photo
+/// camera, for [`analyse_silhouette`].
 pub fn fit_case_mesh(
     case: &BenchCase,
     labels: &LabelImage,
+    seed: u64,
     budget: Option<usize>,
     options: &PhotoFitOptions,
 ) -> Result<(BenchScore, Mesh, View), String> {
-    let mut f = start_photo_fit_with(labels, 1, budget, None, options).map_err(|e| e.0)?;
+    let mut f = start_photo_fit_with(labels, seed, budget, None, options).map_err(|e| e.0)?;
     while !f.session.done() {
         f.session.step();
     }
