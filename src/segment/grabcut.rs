@@ -110,8 +110,8 @@ pub struct Session {
     colors: Vec<Rgb>,
     /// Smoothness weights to the right, down, down-right and down-left neighbours (eq. 11).
     nlinks: Vec<[f32; 4]>,
-    /// Negative log-likelihood of each pixel under the border model.
-    border_nll: Vec<f32>,
+    /// The colour model of the image's border (the background's colours).
+    border_model: Gmm,
     /// Border NLL above which a colour is "not background-like".
     border_tau: f32,
     /// Sides (top, bottom, left, right) that the object appears to touch.
@@ -161,7 +161,7 @@ impl Session {
             None => {
                 let tau = s.border_tau;
                 let unexplained: Vec<bool> = (0..w * h)
-                    .map(|i| !is_bg(s.hard[i]) && s.border_nll[i] > tau)
+                    .map(|i| !is_bg(s.hard[i]) && s.border_nll(i) > tau)
                     .collect();
                 // A table's grain and a background's odd pixel are streaks and specks that the
                 // border happened not to show; an object is a region. Left in, they teach the
@@ -281,17 +281,13 @@ impl Session {
         let colors = photo.colors();
         let nlinks = nlinks_of(&colors, w, h);
         let (border_model, border_tau, touched) = border_model(&colors, w, h)?;
-        let border_nll: Vec<f32> = colors
-            .iter()
-            .map(|c| border_model.nll_shaded(c, SHADE_RANGE[0], SHADE_RANGE[1]))
-            .collect();
         let empty = Mask::empty(w as u32, h as u32)?;
         Ok(Session {
             w,
             h,
             opts: opts.clone(),
             nlinks,
-            border_nll,
+            border_model,
             border_tau,
             touched,
             crossed: None,
@@ -513,6 +509,14 @@ impl Session {
         changed
     }
 
+    /// Negative log-likelihood of pixel `i` under the border model, shaded copies of its
+    /// colours included ([`Gmm::nll_shaded`]). Computed where asked, not for every pixel: with a
+    /// coarse start only the hole test needs it, on a few pixels.
+    fn border_nll(&self, i: usize) -> f32 {
+        self.border_model
+            .nll_shaded(&self.colors[i], SHADE_RANGE[0], SHADE_RANGE[1])
+    }
+
     /// Clean-up (largest component, holes), don't-care band, bounding box and confidence.
     fn finish(&mut self) -> Result<(), SegmentError> {
         let (w, h) = (self.w, self.h);
@@ -528,7 +532,7 @@ impl Session {
                 .any(|&i| self.hard[i] == STROKE_BG || self.hard[i] == PAINT_BG);
             let bg_like = hole
                 .iter()
-                .filter(|&&i| self.border_nll[i] <= self.border_tau)
+                .filter(|&&i| self.border_nll(i) <= self.border_tau)
                 .count();
             let real = marked || (hole.len() >= min_hole && 2 * bg_like >= hole.len());
             if !real {
