@@ -19,7 +19,8 @@
 //! The last two columns are a diagnosis: the fitted camera's elevation (the photo's is in
 //! *above*) and the height over the rim's diameter of the fit and of the truth
 //! ([`procfit::dish_photo_bench::rim_aspect`]); with `PROCFIT_DISH_DUMP=DIR` in the
-//! environment each fit's parameters are written to `DIR/NAME.params` (name and value a line).
+//! environment each fit's parameters are written to `DIR/NAME.params` (name and value a line, then
+//! `loss` and the fit's final loss).
 
 use procfit::bench_cases::case_dirs;
 use procfit::dish_photo_bench::{BenchCase, auto_segmentation, fit_case, truth_check};

@@ -312,7 +312,7 @@ pub fn fit_case(
             .collect();
         let _ = std::fs::write(
             Path::new(&dir).join(format!("{}.params", case.camera.name)),
-            names.join("\n"),
+            format!("{}\nloss {}", names.join("\n"), result.loss),
         );
     }
     let iou = iou64(
