@@ -232,9 +232,9 @@ pub struct BenchScore {
 /// height, about the centre of those points), Y up: how tall a dish is for its opening, the
 /// proportion a view from above gets wrong when it misjudges the elevation.
 pub fn rim_aspect(positions: &[Vec3]) -> f64 {
-    let (lo, hi) = positions.iter().fold((f32::MAX, f32::MIN), |(l, h), p| {
-        (l.min(p.y), h.max(p.y))
-    });
+    let (lo, hi) = positions
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(l, h), p| (l.min(p.y), h.max(p.y)));
     let top: Vec<&Vec3> = positions
         .iter()
         .filter(|p| p.y >= hi - 0.03 * (hi - lo))
@@ -242,8 +242,12 @@ pub fn rim_aspect(positions: &[Vec3]) -> f64 {
     if top.is_empty() {
         return 0.0;
     }
-    let (xs, zs) = top.iter().fold((f32::MAX, f32::MIN), |(a, b), p| (a.min(p.x), b.max(p.x)));
-    let (zl, zh) = top.iter().fold((f32::MAX, f32::MIN), |(a, b), p| (a.min(p.z), b.max(p.z)));
+    let (xs, zs) = top
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(a, b), p| (a.min(p.x), b.max(p.x)));
+    let (zl, zh) = top
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(a, b), p| (a.min(p.z), b.max(p.z)));
     let c = glam::Vec2::new(0.5 * (xs + zs), 0.5 * (zl + zh));
     let r = top
         .iter()

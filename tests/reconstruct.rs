@@ -324,10 +324,7 @@ fn measured_mug_on_a_saucer_gets_a_saucer() {
             saucer, 1.0,
             "pitch {pitch}: no saucer fitted (IoU-64 {iou:.4})"
         );
-        assert!(
-            iou >= min_iou,
-            "pitch {pitch}: IoU-64 {iou:.4} < {min_iou}"
-        );
+        assert!(iou >= min_iou, "pitch {pitch}: IoU-64 {iou:.4} < {min_iou}");
     }
 }
 
