@@ -16,6 +16,11 @@
 //! segmentation time (median of 5, one thread), confidence and warnings, and the mask
 //! plausibility measures ([`procfit::segment::plausible`]) of the automatic mask, of the true
 //! one and, with `-- --check DIR`, of the masks `DIR/NAME-auto.png` (say, an older version's).
+//! The last two columns are a diagnosis: the fitted camera's elevation (the photo's is in
+//! *above*) and the height over the rim's diameter of the fit and of the truth
+//! ([`procfit::dish_photo_bench::rim_aspect`]); with `PROCFIT_DISH_DUMP=DIR` in the
+//! environment each fit's parameters are written to `DIR/NAME.params` (name and value a line, then
+//! `loss` and the fit's final loss).
 
 use procfit::bench_cases::case_dirs;
 use procfit::dish_photo_bench::{BenchCase, auto_segmentation, fit_case, truth_check};
@@ -76,9 +81,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         dirs.len()
     );
     println!(
-        "| case | above | lens | saucer / spoon | fov | mask IoU | IoU-64 | photo-view IoU (true / CLI) | saucer fitted | seconds | warnings | truth check |"
+        "| case | above | lens | saucer / spoon | fov | mask IoU | IoU-64 | photo-view IoU (true / CLI) | saucer fitted | seconds | warnings | truth check | elevation fitted | height/rim fit / true |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     // Per fov row: mask IoU, IoU-64, photo-view IoU, seconds.
     let mut sums: Vec<(bool, Vec<[f64; 4]>)> = Vec::new();
     let mut notes = Vec::new();
@@ -124,7 +129,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         s.warnings.len().to_string()
                     };
                     println!(
-                        "| {} | {:.0}° | {:.0} mm | {setting} | {which} | {:.3} | {:.3} | {:.3} / {:.3} | {} | {secs:.1} | {warn} | {check:.3} |",
+                        "| {} | {:.0}° | {:.0} mm | {setting} | {which} | {:.3} | {:.3} | {:.3} / {:.3} | {} | {secs:.1} | {warn} | {check:.3} | {:.0}° | {:.2} / {:.2} |",
                         c.name,
                         c.elevation_deg,
                         c.focal_35mm,
@@ -133,6 +138,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         s.photo_iou,
                         s.cli_photo_iou,
                         if s.saucer { "yes" } else { "no" },
+                        s.fitted_elevation_deg,
+                        s.fitted_aspect,
+                        s.true_aspect,
                     );
                     let row = [s.mask_iou, s.iou64, s.photo_iou, secs];
                     match sums.iter_mut().find(|x| x.0 == known) {

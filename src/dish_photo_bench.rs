@@ -219,6 +219,45 @@ pub struct BenchScore {
     pub warnings: Vec<String>,
     /// The fitted dish's saucer switch (`has_saucer` > ½).
     pub saucer: bool,
+    /// The fitted camera's elevation above the dish's ground plane, degrees (a diagnosis: the
+    /// photo's is [`BenchCamera::elevation_deg`]).
+    pub fitted_elevation_deg: f64,
+    /// The fitted model's height over its rim's diameter ([`rim_aspect`]).
+    pub fitted_aspect: f64,
+    /// The same of the truth.
+    pub true_aspect: f64,
+}
+
+/// A mesh's height over the diameter of its rim (the widest circle among its top 3 % in
+/// height, about the centre of those points), Y up: how tall a dish is for its opening, the
+/// proportion a view from above gets wrong when it misjudges the elevation.
+pub fn rim_aspect(positions: &[Vec3]) -> f64 {
+    let (lo, hi) = positions
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(l, h), p| (l.min(p.y), h.max(p.y)));
+    let top: Vec<&Vec3> = positions
+        .iter()
+        .filter(|p| p.y >= hi - 0.03 * (hi - lo))
+        .collect();
+    if top.is_empty() {
+        return 0.0;
+    }
+    let (xs, zs) = top
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(a, b), p| (a.min(p.x), b.max(p.x)));
+    let (zl, zh) = top
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(a, b), p| (a.min(p.z), b.max(p.z)));
+    let c = glam::Vec2::new(0.5 * (xs + zs), 0.5 * (zl + zh));
+    let r = top
+        .iter()
+        .map(|p| (glam::Vec2::new(p.x, p.z) - c).length())
+        .fold(0.0f32, f32::max);
+    if r > 0.0 {
+        f64::from((hi - lo) / (2.0 * r))
+    } else {
+        0.0
+    }
 }
 
 /// The automatic segmentation of the case's photo, as the CLI makes it (decoded at the
@@ -268,6 +307,18 @@ pub fn fit_case(
         .first()
         .ok_or_else(|| FitError("a fit without a view".into()))?;
     let moved = to_photo_frame(&mesh.positions, fitted, &case.view()?);
+    if let Ok(dir) = std::env::var("PROCFIT_DISH_DUMP") {
+        let names: Vec<String> = g
+            .params()
+            .iter()
+            .zip(&result.model.params)
+            .map(|(s, v)| format!("{} {v:.4}", s.name))
+            .collect();
+        let _ = std::fs::write(
+            Path::new(&dir).join(format!("{}.params", case.camera.name)),
+            format!("{}\nloss {}", names.join("\n"), result.loss),
+        );
+    }
     let iou = iou64(
         (&moved, &mesh.triangles),
         (&case.truth.positions, &case.truth.triangles),
@@ -280,7 +331,14 @@ pub fn fit_case(
         .position(|s| s.name == "has_saucer")
         .and_then(|i| result.model.params.get(i))
         .is_some_and(|&v| v > 0.5);
+    // The object's up axis in the fitted camera's frame (camera on +Z looking down −Z):
+    // tilted towards the camera by the elevation.
+    let up = fitted.params.rotation_and_derivatives()[0] * DVec3::Y;
+    let fitted_elevation_deg = up.z.clamp(-1.0, 1.0).asin().to_degrees();
     Ok(BenchScore {
+        fitted_elevation_deg,
+        fitted_aspect: rim_aspect(&mesh.positions),
+        true_aspect: rim_aspect(&case.truth.positions),
         mask_iou,
         iou64: iou,
         photo_iou,

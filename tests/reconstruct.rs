@@ -295,14 +295,16 @@ fn param(r: &procfit::reconstruct::FitResult, name: &str) -> f64 {
 }
 
 /// Issue 16: a mug on a saucer (both lathed from measured dimensions, not by the generator),
-/// photographed from 26° and from 50° above: the fit puts a saucer under the mug. Measured
-/// IoU-64 0.799 and 0.783: the saucer comes out too low (0.05 for 0.17) and the mug too short — one view's ambiguity between the saucer's height, its width and the
-/// camera's elevation, which the silhouette alone does not settle (issue 16's "views from
-/// above" and "one-photo ambiguity" are what is left).
+/// photographed from 26° and from 50° above: the fit puts a saucer under the mug. The mug's
+/// foot hides behind the saucer's front rim, so the silhouette pins only how far the mug's rim
+/// stands above the saucer's, and the fit keeps about the seed saucer's rim height: with a
+/// 5 mm seed rim (`dish::SAUCER.height` 0.06) IoU-64 was 0.799 and 0.783 (saucer 0.05 for
+/// 0.17, the mug too short); with a 15 mm one (0.17) 0.910 and 0.808. From 50° above what is
+/// left is the elevation–shape trade of one view (issue 16's "views from above").
 #[test]
 fn measured_mug_on_a_saucer_gets_a_saucer() {
     let mesh = measured_mug_on_saucer();
-    for (seed, pitch) in [(41, 0.45), (42, 0.87)] {
+    for (seed, pitch, min_iou) in [(41, 0.45, 0.85), (42, 0.87, 0.75)] {
         let mut rng = Rng::new(seed);
         let truth = view_at(&mut rng, &mesh, 0.5, 0.0, pitch);
         let mask = render_mask(&mesh, &truth, 256);
@@ -322,7 +324,7 @@ fn measured_mug_on_a_saucer_gets_a_saucer() {
             saucer, 1.0,
             "pitch {pitch}: no saucer fitted (IoU-64 {iou:.4})"
         );
-        assert!(iou >= 0.7, "pitch {pitch}: IoU-64 {iou:.4} < 0.7");
+        assert!(iou >= min_iou, "pitch {pitch}: IoU-64 {iou:.4} < {min_iou}");
     }
 }
 
@@ -498,7 +500,8 @@ fn a_quick_fit_is_one_run_for_the_page_and_the_cli_alike() {
 /// The generator's own cup on a saucer from the same two cameras: the saucer is found and the
 /// whole reaches IoU-64 ≥ 0.85. The silhouette is matched almost exactly (loss < 0.001); what
 /// is left is one view's ambiguity between the saucer's radius, its height and the camera's
-/// elevation (measured 0.951 and 0.912).
+/// elevation (measured 0.951 and 0.912 with the preset's old 5 mm saucer rim, 0.957 and 0.929
+/// with the 15 mm one).
 #[test]
 fn own_cup_on_a_saucer_gets_its_saucer() {
     let g = generator("dish");
