@@ -8,7 +8,8 @@
 //!
 //! `cargo bench --bench tree_bench` fits the colour photo (labelled as the CLI does);
 //! `-- --labels` fits the true label image too; `-- --quick` cuts the GA budget (`PHOTO_GA_BUDGET`) by 4,
-//! `-- --budget N` sets it, `-- --seed N` the fit's seed (1 by default);
+//! `-- --budget N` sets it, `-- --seed N` the fit's seed (1 by default), `-- --frame
+//! off|area|top|both` the candidates' framing ([`CandidateFraming`]; `--no-area` is `off`);
 //! `-- NAME …` runs only those cases; `-- --dir DIR` reads another folder; `-- --analyse`
 //! adds a table of where the photo-view IoU is lost ([`analyse_silhouette`]: as is, leaf gaps
 //! closed, convex hulls, fills, area ratio) for each fit, the truth and the other seed.
@@ -17,7 +18,7 @@ use procfit::bench_cases::case_dirs;
 use procfit::tree::bench::{
     BenchCase, SilhouetteAnalysis, analyse_silhouette, crown_ellipsoid, fit_case_mesh, sphere,
 };
-use procfit::tree::impostor::{PhotoFitOptions, silhouette_iou64};
+use procfit::tree::impostor::{CandidateFraming, PhotoFitOptions, silhouette_iou64};
 use procfit::tree::labels::{ColorThresholds, foliage_problem, photo_labels};
 use std::path::PathBuf;
 
@@ -35,6 +36,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let no_envelope = args.iter().any(|a| a == "--no-envelope");
     let no_area = args.iter().any(|a| a == "--no-area");
     let mut weight = None;
+    let mut framing = None;
     let mut budget_arg: Option<usize> = None;
     let mut seed = 1;
     let mut analyses: Vec<(String, &str, SilhouetteAnalysis)> = Vec::new();
@@ -46,6 +48,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "--dir" => dir = PathBuf::from(it.next().ok_or("--dir needs a folder")?),
             "--weight" => {
                 weight = Some(it.next().ok_or("--weight needs a number")?.parse::<f64>()?)
+            }
+            "--frame" => {
+                framing = Some(match it.next().map(String::as_str) {
+                    Some("off") => CandidateFraming::Off,
+                    Some("area") => CandidateFraming::Area,
+                    Some("top") => CandidateFraming::Top,
+                    Some("both") => CandidateFraming::AreaAndTop,
+                    _ => return Err("--frame takes off, area, top or both".into()),
+                })
             }
             "--seed" => seed = it.next().ok_or("--seed needs a number")?.parse::<u64>()?,
             "--budget" => {
@@ -103,6 +114,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         fov_y: (!no_fov).then_some(case.camera.fov_y),
                         ..PhotoFitOptions::default()
                     };
+                    if let Some(f) = framing {
+                        options.framing = f;
+                    }
                     if let Some(w) = weight {
                         options.silhouette_weight = w;
                     }
@@ -113,7 +127,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         options.envelope_seeds = false;
                     }
                     if no_area {
-                        options.area_framing = false;
+                        options.framing = CandidateFraming::Off;
                     }
                     let t = std::time::Instant::now();
                     pool.install(|| fit_case_mesh(&case, labels, seed, budget, &options))
