@@ -275,7 +275,7 @@ fn spec() -> &'static [ParamSpec] {
             "",
             1.3,
             5.0,
-            2.4,
+            SAUCER.radius,
         ));
         s.push(c(
             "saucer_height",
@@ -284,7 +284,7 @@ fn spec() -> &'static [ParamSpec] {
             "",
             0.02,
             0.2,
-            0.06,
+            SAUCER.height,
         ));
         s.push(c(
             "saucer_well",
@@ -293,7 +293,7 @@ fn spec() -> &'static [ParamSpec] {
             "",
             0.25,
             0.8,
-            0.45,
+            SAUCER.well,
         ));
         s
     })
