@@ -242,13 +242,13 @@ pub fn rim_aspect(positions: &[Vec3]) -> f64 {
     if top.is_empty() {
         return 0.0;
     }
-    let (xs, zs) = top
+    let (xl, xh) = top
         .iter()
         .fold((f32::MAX, f32::MIN), |(a, b), p| (a.min(p.x), b.max(p.x)));
     let (zl, zh) = top
         .iter()
         .fold((f32::MAX, f32::MIN), |(a, b), p| (a.min(p.z), b.max(p.z)));
-    let c = glam::Vec2::new(0.5 * (xs + zs), 0.5 * (zl + zh));
+    let c = glam::Vec2::new(0.5 * (xl + xh), 0.5 * (zl + zh));
     let r = top
         .iter()
         .map(|p| (glam::Vec2::new(p.x, p.z) - c).length())
@@ -314,10 +314,11 @@ pub fn fit_case(
             .zip(&result.model.params)
             .map(|(s, v)| format!("{} {v:.4}", s.name))
             .collect();
-        let _ = std::fs::write(
-            Path::new(&dir).join(format!("{}.params", case.camera.name)),
-            format!("{}\nloss {}", names.join("\n"), result.loss),
-        );
+        let path = Path::new(&dir).join(format!("{}.params", case.camera.name));
+        if let Err(e) = std::fs::write(&path, format!("{}\nloss {}", names.join("\n"), result.loss))
+        {
+            eprintln!("PROCFIT_DISH_DUMP: {}: {e}", path.display());
+        }
     }
     let iou = iou64(
         (&moved, &mesh.triangles),

@@ -325,9 +325,9 @@ pub struct SaucerShape {
     pub well: f64,
 }
 
-/// The saucer the presets and seeds use: about 2.4 times the cup's foot, its rim 0.15 units
-/// high (15 mm for a mug of 0.9 units = 95 mm; measured saucers' rims stand 15–17 mm above
-/// the table). From above or from the side, the cup's foot hides behind the saucer's front
+/// The saucer the presets and seeds use: about 2.4 times the cup's foot, its rim 0.17 ×
+/// [`HEIGHT_UNIT`] ≈ 0.15 units high (16 mm beside a mug of 0.9 units = 95 mm; measured
+/// saucers' rims stand 15–17 mm above the table). From above or from the side, the cup's foot hides behind the saucer's front
 /// rim, so one silhouette cannot tell a taller saucer under a taller cup from a lower one
 /// under a squatter cup (the height of the cup's rim over the saucer's is all it pins): the fit
 /// keeps about the seed's rim height, and a 5 mm seed rim made cups on saucers 15 % too

@@ -48,7 +48,7 @@ impl From<crate::camera::CameraError> for TreeError {
 pub struct TreeImpostor {
     view: View,
     renderer: Renderer,
-    /// A renderer at half the size, for [`TreeImpostor::render_framed`]'s area estimate
+    /// A renderer at half the size, for [`TreeImpostor::render_framed`]'s [`Extent`] estimate
     /// (made on first use).
     half: Option<(View, Renderer)>,
     leaf: Vec<f32>,
@@ -82,8 +82,8 @@ impl TreeImpostor {
     }
 
     /// The label image of the tree scaled about its foot (the origin) by the factor `frame`
-    /// picks from the tree's area: its tree pixels at this view's size, estimated from a
-    /// render at half the size. Returns the factor and the image. Scaling through the view's
+    /// picks from the tree's [`Extent`] (its area and top row at this view's size), estimated
+    /// from a render at half the size. Returns the factor and the image. Scaling through the view's
     /// object scale gives the image of the tree generated `scale` times taller (the height
     /// gene scales every length: `height_scales_the_whole_tree` in the generator), without
     /// generating it again, and the half-size estimate costs about a quarter of a full render:
@@ -153,7 +153,7 @@ impl TreeImpostor {
         ))
     }
 
-    /// The tree's covered area in pixels of this view, from the leaf and wood coverage at half
+    /// The tree's [`Extent`] in pixels of this view, from the leaf and wood coverage at half
     /// the size.
     fn half_extent(
         &mut self,
