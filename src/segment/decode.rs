@@ -85,6 +85,10 @@ impl Photo {
             .map_err(|e| SegmentError(format!("cannot decode the image: {e}")))?;
         let (w, h) = decoder.dimensions();
         check_source_size(w, h)?;
+        if bytes.starts_with(&[0xFF, 0xD8, 0xFF]) {
+            // The component count is not known here: the bound that holds for any JPEG.
+            check_jpeg_data_size(bytes.len(), w, h, false)?;
+        }
         // A broken EXIF block is not worth refusing the photo for: treat it as upright.
         let orientation = decoder.orientation().unwrap_or(Orientation::NoTransforms);
         let img = DynamicImage::from_decoder(decoder)
@@ -231,6 +235,10 @@ fn decode_jpeg_scaled(bytes: &[u8], working_side: u32) -> Scaled {
     if let Err(e) = check_source_size(w, h) {
         return Scaled::Refused(e);
     }
+    let grey = info.pixel_format == jpeg_decoder::PixelFormat::L8;
+    if let Err(e) = check_jpeg_data_size(bytes.len(), w, h, grey) {
+        return Scaled::Refused(e);
+    }
     let (tw, th) = target_size(w, h, working_side);
     // No reduction possible: the full decoder is the faster one at full scale.
     if w < 2 * tw || h < 2 * th {
@@ -311,6 +319,27 @@ pub fn check_complete(bytes: &[u8]) -> Result<(), SegmentError> {
             "the JPEG is truncated (the file ends before the image does): copy or download it again",
         ))
     }
+}
+
+/// Refuses a JPEG too short to hold the image its header claims. The decoders `image` and
+/// `jpeg-decoder` use (Huffman coding only: they refuse arithmetic coding) spend at least one bit
+/// on each 8×8 block of each component (its DC code, in the first scan that covers it), so a
+/// complete file has at least that many bits. A grey image has `⌈w/8⌉·⌈h/8⌉` blocks; in a colour
+/// one the component of the largest horizontal sampling is `w` wide and at least `h/4` high
+/// (sampling factors are 1–4), so it alone has at least a quarter of that. Fuzzing found
+/// sub-kilobyte files claiming 8222×4456 that decoded "successfully" into 36 MP of grey, and were
+/// segmented as a photo; a cut-off download whose end marker survived is caught the same way.
+fn check_jpeg_data_size(len: usize, w: u32, h: u32, grey: bool) -> Result<(), SegmentError> {
+    let blocks = u64::from(w.div_ceil(8)) * u64::from(h.div_ceil(8));
+    let min_blocks = if grey { blocks } else { blocks / 4 };
+    let min_bytes = min_blocks / 8;
+    if (len as u64) < min_bytes {
+        return Err(SegmentError(format!(
+            "the JPEG is truncated or corrupt: a {w}×{h} image needs at least {min_bytes} bytes \
+             of data but the file has {len}: copy or download it again"
+        )));
+    }
+    Ok(())
 }
 
 fn check_working_side(side: u32) -> Result<(), SegmentError> {
@@ -468,12 +497,16 @@ mod tests {
             &include_bytes!(
                 "../../fuzz/regressions/decode_photo/corrupt-jpeg-claiming-2653x8510-decoded-in-full"
             )[..],
+            // Decoded without an error, as 36 MP of grey, before the data-size bound.
+            &include_bytes!(
+                "../../fuzz/regressions/decode_photo/corrupt-jpeg-553-bytes-claiming-8222x4456-accepted-as-grey"
+            )[..],
         ] {
             for side in [64, 128, 512] {
                 let r = Photo::decode(bytes, side);
                 assert!(
                     r.as_ref()
-                        .is_err_and(|e| e.0.starts_with("cannot decode the image")),
+                        .is_err_and(|e| e.0.starts_with("the JPEG is truncated or corrupt")),
                     "{:?}",
                     r.map(|p| p.source_size())
                 );
@@ -529,6 +562,58 @@ mod tests {
         let mut padded = jpeg.clone();
         padded.extend_from_slice(b"trailing");
         assert!(Photo::decode(&padded, 512).is_ok());
+    }
+
+    /// `img` encoded as a JPEG by the `image` crate.
+    fn jpeg_of(img: image::DynamicImage) -> Vec<u8> {
+        let mut jpeg = Vec::new();
+        img.write_to(
+            &mut std::io::Cursor::new(&mut jpeg),
+            image::ImageFormat::Jpeg,
+        )
+        .expect("encode");
+        jpeg
+    }
+
+    #[test]
+    fn a_jpeg_too_short_for_its_claimed_size_is_refused() {
+        // A 64×48 photo whose frame header is edited to claim 8000×4000: the decoder would fill
+        // 32 MP with grey from under a kilobyte of data and call it a photo.
+        let img =
+            image::RgbImage::from_fn(64, 48, |x, y| image::Rgb([x as u8 * 4, y as u8 * 5, 90]));
+        let mut jpeg = jpeg_of(image::DynamicImage::ImageRgb8(img));
+        let sof = jpeg
+            .windows(2)
+            .position(|w| w == [0xFF, 0xC0])
+            .expect("a baseline frame header");
+        jpeg[sof + 5..sof + 9].copy_from_slice(&[0x0F, 0xA0, 0x1F, 0x40]); // height 4000, width 8000
+        for decode in [Photo::decode, Photo::decode_full] {
+            let Err(err) = decode(&jpeg, 512) else {
+                panic!("{} bytes claiming 8000×4000 were accepted", jpeg.len());
+            };
+            let msg = err.to_string();
+            assert!(
+                msg.contains("truncated or corrupt") && msg.contains("8000×4000"),
+                "{msg}"
+            );
+            assert_eq!(msg.lines().count(), 1);
+        }
+    }
+
+    #[test]
+    fn a_uniform_jpeg_is_not_too_short() {
+        // The most compressible real images (one flat colour, grey and colour) are far above
+        // the bound: it refuses only what no encoder can make.
+        let grey = image::GrayImage::from_pixel(1024, 768, image::Luma([200]));
+        let colour = image::RgbImage::from_pixel(1024, 768, image::Rgb([20, 90, 200]));
+        for img in [
+            image::DynamicImage::ImageLuma8(grey),
+            image::DynamicImage::ImageRgb8(colour),
+        ] {
+            let jpeg = jpeg_of(img);
+            let photo = Photo::decode(&jpeg, 512).expect("a flat JPEG decodes");
+            assert_eq!((photo.width(), photo.height()), (512, 384));
+        }
     }
 
     #[test]
