@@ -2,7 +2,9 @@
 //! mug (the measured, lathed one — not the generator's), a bowl (a non-preset dish) and a
 //! building (a non-preset one), each from one 512² mask, on 1 and 2 threads. Prints a markdown
 //! table of medians over several random cameras. Run with `cargo bench --bench reconstruct`;
-//! `-- WORD …` runs only the objects whose name contains one of the words (`-- building`).
+//! `-- WORD …` runs only the objects whose name contains one of the words (`-- building`);
+//! `-- --threads N` runs one thread count only; `-- --each` prints a line per camera (its yaw
+//! and elevation, the IoU-64 and the fitted parameters).
 #![allow(
     clippy::unwrap_used,
     clippy::expect_used,
@@ -39,9 +41,18 @@ fn main() {
         ("bowl", "dish", bowl),
         ("building", "building", building),
     ];
-    let words: Vec<String> = std::env::args()
-        .skip(1)
-        .filter(|a| !a.starts_with('-'))
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let each = args.iter().any(|a| a == "--each");
+    let only_threads: Option<usize> = args
+        .iter()
+        .position(|a| a == "--threads")
+        .and_then(|i| args.get(i + 1))
+        .map(|n| n.parse().expect("--threads N"));
+    let words: Vec<String> = args
+        .iter()
+        .enumerate()
+        .filter(|&(i, a)| !a.starts_with('-') && (i == 0 || args[i - 1] != "--threads"))
+        .map(|(_, a)| a.clone())
         .collect();
     let wanted = |name: &str| words.is_empty() || words.iter().any(|w| name.contains(w.as_str()));
     println!(
@@ -59,6 +70,9 @@ fn main() {
         let masks: Vec<_> = truths.iter().map(|t| render_mask(mesh, t, SIDE)).collect();
         let mut first_params = None;
         for threads in [1, 2] {
+            if only_threads.is_some_and(|n| n != threads) {
+                continue;
+            }
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .build()
@@ -67,7 +81,7 @@ fn main() {
             for (truth, mask) in truths.iter().zip(&masks) {
                 let t0 = Instant::now();
                 let r = pool.install(|| {
-                    fit(
+                    let mut session = procfit::reconstruct::Session::new(
                         FitConfig {
                             generator: g.to_string(),
                             fov_y: vec![Some(0.5)],
@@ -79,9 +93,36 @@ fn main() {
                         },
                         vec![mask.clone()],
                     )
+                    .unwrap();
+                    let r = session.run().unwrap();
+                    if each {
+                        for (k, run) in session.run_results().into_iter().enumerate() {
+                            let Some(run) = run else { continue };
+                            eprintln!(
+                                "    run {k}: loss {:.5}, tie prior {:.3}, fitted yaw {:.0}°, IoU-64 {:.3}",
+                                run.loss,
+                                run.model.generator.tie_prior(&run.model.params),
+                                run.views[0].params.yaw.to_degrees(),
+                                fit_iou64(run, mesh, truth)
+                            );
+                        }
+                    }
+                    r
                 });
                 times.push(t0.elapsed().as_secs_f64());
                 ious.push(fit_iou64(&r, mesh, truth));
+                if each {
+                    eprintln!(
+                        "  {name}: camera yaw {:.0}°, elevation {:.0}° (fitted {:.0}°, {:.0}°): \
+                         IoU-64 {:.3}, params {:.3?}",
+                        truth.yaw.to_degrees(),
+                        truth.pitch.to_degrees(),
+                        r.views[0].params.yaw.to_degrees(),
+                        r.views[0].params.pitch.to_degrees(),
+                        ious[ious.len() - 1],
+                        r.model.params
+                    );
+                }
                 evals = r.evaluations;
                 params.push(r.model.params.clone());
             }

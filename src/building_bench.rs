@@ -808,10 +808,12 @@ fn fit_scored(
     photo: Option<&[u8]>,
 ) -> Result<BenchScore, FitError> {
     let for_colours = mask.clone();
+    let generator = crate::generators::building::Building.name();
     let config = FitConfig {
-        generator: crate::generators::building::Building.name().into(),
+        generator: generator.into(),
         fov_y: vec![Some(view.params.fov_y)],
         quality,
+        restarts: FitConfig::restarts_for(generator, quality),
         ..FitConfig::default()
     };
     let result = Session::new(config, vec![mask])?.run()?;

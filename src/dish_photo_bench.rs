@@ -288,7 +288,7 @@ pub fn fit_case(
         generator: crate::generators::dish::Dish.name().into(),
         fov_y: vec![fov_y],
         quality,
-        restarts: FitConfig::restarts_for_quality(quality),
+        restarts: FitConfig::restarts_for("dish", quality),
         ..FitConfig::default()
     };
     let masks = vec![seg.mask.clone()];

@@ -32,7 +32,8 @@ pub struct ReconstructArgs {
     #[arg(long)]
     budget: Option<usize>,
     /// Whole fits from different seeds, run side by side; the lowest final loss wins (not for
-    /// trees). Default: 3, or 1 below quality 0.5 (a quick preview), as on the page.
+    /// trees). Default: 3, 6 for a building, or 1 below quality 0.5 (a quick preview), as on
+    /// the page.
     #[arg(long)]
     restarts: Option<usize>,
     /// Quality/speed knob: multiplies every stage's budget, in (0, 16].
@@ -387,15 +388,16 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
     let (masks, pixels): (Vec<Mask>, Vec<Option<Vec<u8>>>) =
         views.into_iter().map(|v| (v.mask, v.rgba)).unzip();
     let windows = load_windows(a, &generator, &masks)?;
+    let restarts = a
+        .restarts
+        .unwrap_or_else(|| FitConfig::restarts_for(&generator, a.quality));
     let config = FitConfig {
         generator,
         start,
         seed: a.seed,
         quality: a.quality,
         budget: a.budget,
-        restarts: a
-            .restarts
-            .unwrap_or_else(|| FitConfig::restarts_for_quality(a.quality)),
+        restarts,
         fov_y,
         windows,
         ..FitConfig::default()

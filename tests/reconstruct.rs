@@ -486,14 +486,16 @@ fn defaults_table() {
 
 #[test]
 fn a_quick_fit_is_one_run_for_the_page_and_the_cli_alike() {
-    use procfit::reconstruct::{DEFAULT_RESTARTS, QUICK_QUALITY};
-    assert_eq!(FitConfig::restarts_for_quality(0.25), 1);
-    assert_eq!(FitConfig::restarts_for_quality(QUICK_QUALITY * 0.99), 1);
-    assert_eq!(
-        FitConfig::restarts_for_quality(QUICK_QUALITY),
-        DEFAULT_RESTARTS
-    );
-    assert_eq!(FitConfig::restarts_for_quality(3.0), DEFAULT_RESTARTS);
+    use procfit::reconstruct::{BUILDING_RESTARTS, DEFAULT_RESTARTS, QUICK_QUALITY};
+    for g in ["auto", "dish", "building"] {
+        assert_eq!(FitConfig::restarts_for(g, 0.25), 1);
+        assert_eq!(FitConfig::restarts_for(g, QUICK_QUALITY * 0.99), 1);
+    }
+    for q in [QUICK_QUALITY, 3.0] {
+        assert_eq!(FitConfig::restarts_for("dish", q), DEFAULT_RESTARTS);
+        assert_eq!(FitConfig::restarts_for("auto", q), DEFAULT_RESTARTS);
+        assert_eq!(FitConfig::restarts_for("building", q), BUILDING_RESTARTS);
+    }
     assert_eq!(FitConfig::default().restarts, DEFAULT_RESTARTS);
 }
 

@@ -248,6 +248,15 @@ impl Session {
         })
     }
 
+    /// Every finished run's result, by run index (`None` for a run still going): the
+    /// alternatives [`Session::result`] chose among (for benchmarks and diagnosis).
+    pub fn run_results(&self) -> Vec<Option<&FitResult>> {
+        self.finished
+            .iter()
+            .map(|f| f.as_ref().map(|(r, _)| r))
+            .collect()
+    }
+
     /// The best finished run's result and last progress.
     fn best_finished(&self) -> Option<&(FitResult, Progress)> {
         self.finished.get(self.best?)?.as_ref()

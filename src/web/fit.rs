@@ -182,7 +182,7 @@ impl FitSession {
             start: (!start.is_empty()).then(|| start.to_vec()),
             windows: windows_of(widths, heights, window_flags, window_codes)?,
             // The core's policy: a quick preview is one run (quality is checked there too).
-            restarts: FitConfig::restarts_for_quality(quality),
+            restarts: FitConfig::restarts_for(generator, quality),
             ..FitConfig::default()
         };
         let masks = masks_of(widths, heights, codes)?;
