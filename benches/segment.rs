@@ -1,7 +1,8 @@
 //! Benchmark: a 12 MP JPEG (made here) → mask at working resolution, automatic mode and an
 //! interactive re-cut. Prints a markdown table of medians; run with
 //! `cargo bench --bench segment`. Targets (issue 5, for wasm): automatic ≤ 300 ms, re-cut
-//! ≤ 50 ms; these are native numbers.
+//! ≤ 50 ms; these are native numbers. Then the same photo as a PNG (no reduced-scale decode:
+//! every pixel is decoded and area-averaged) and the area downscale alone.
 #![allow(
     clippy::unwrap_used,
     clippy::expect_used,
@@ -11,6 +12,7 @@
 use std::time::Instant;
 
 use procfit::segment::bench::synthetic_photo_jpeg;
+use procfit::segment::decode::area_resample;
 use procfit::segment::{Label, Options, Photo, Session, Stroke, WORKING_SIDE};
 
 /// CPU time of this thread in ms (Linux), so a loaded machine does not inflate the figures.
@@ -108,5 +110,34 @@ fn main() {
     println!(
         "| next interactive re-cut (graph reused) | {:.1} | {:.1} | 50 |",
         r2.0, r2.1
+    );
+    // The same photo as a PNG, and the area downscale alone on its 12 MP of RGB.
+    let rgb = image::load_from_memory(&jpeg).expect("decode").into_rgb8();
+    let (sw, sh) = rgb.dimensions();
+    let mut png = Vec::new();
+    image::DynamicImage::ImageRgb8(rgb.clone())
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .expect("encode");
+    let (mut png_t, mut down_t) = ((vec![], vec![]), (vec![], vec![]));
+    for _ in 0..runs {
+        let (_, w, c) = timed(|| Photo::decode(&png, WORKING_SIDE).expect("decode"));
+        png_t.0.push(w);
+        png_t.1.push(c);
+        let (_, w, c) = timed(|| area_resample(rgb.as_raw(), sw, sh, 3, size.0, size.1));
+        down_t.0.push(w);
+        down_t.1.push(c);
+    }
+    println!(
+        "| the same photo as a PNG ({} KB): decode + downscale | {:.1} | {:.1} | |",
+        png.len() / 1024,
+        median(png_t.0),
+        median(png_t.1)
+    );
+    println!(
+        "| area downscale alone, {sw}×{sh} RGB → {}×{} | {:.1} | {:.1} | |",
+        size.0,
+        size.1,
+        median(down_t.0),
+        median(down_t.1)
     );
 }
