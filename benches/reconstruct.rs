@@ -68,6 +68,10 @@ fn main() {
             continue;
         }
         let masks: Vec<_> = truths.iter().map(|t| render_mask(mesh, t, SIDE)).collect();
+        let quality: f64 = std::env::var("PROCFIT_QUALITY")
+            .ok()
+            .and_then(|q| q.parse().ok())
+            .unwrap_or(1.0);
         let mut first_params = None;
         for threads in [1, 2] {
             if only_threads.is_some_and(|n| n != threads) {
@@ -85,10 +89,9 @@ fn main() {
                         FitConfig {
                             generator: g.to_string(),
                             fov_y: vec![Some(0.5)],
-                            quality: std::env::var("PROCFIT_QUALITY")
-                                .ok()
-                                .and_then(|q| q.parse().ok())
-                                .unwrap_or(1.0),
+                            quality,
+                            // The page's and the CLI's number of runs for this generator.
+                            restarts: FitConfig::restarts_for(g, quality),
                             ..FitConfig::default()
                         },
                         vec![mask.clone()],
