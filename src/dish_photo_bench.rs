@@ -284,11 +284,12 @@ pub fn fit_case(
         )));
     }
     let mask_iou = binary_iou(&seg.object, &case.mask);
+    let generator = crate::generators::dish::Dish.name();
     let config = FitConfig {
-        generator: crate::generators::dish::Dish.name().into(),
+        generator: generator.into(),
         fov_y: vec![fov_y],
         quality,
-        restarts: FitConfig::restarts_for("dish", quality),
+        restarts: FitConfig::restarts_for(generator, quality),
         ..FitConfig::default()
     };
     let masks = vec![seg.mask.clone()];

@@ -916,6 +916,9 @@ impl Generator for Dish {
             display_name: "Cup, mug or bowl",
             fitted_lod: Lod::Low,
             mask_extra: crate::MaskExtra::None,
+            // A run takes 2–3 s natively; on the measured mug from 8 cameras the best of 3
+            // lifted mean IoU-64 from 0.947 (one run) to 0.969 (procfit's `FitConfig::restarts`).
+            fit_runs: 3,
         }
     }
 

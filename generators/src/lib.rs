@@ -369,6 +369,10 @@ pub struct Capabilities {
     pub fitted_lod: Lod,
     /// The mask extras its fit reads.
     pub mask_extra: MaskExtra,
+    /// Whole fits from different seeds that a fit at full effort makes, keeping the best
+    /// (procfit's `FitConfig::restarts_for`): what one run costs and how often one lands in a
+    /// wrong basin decide it. 1 for a fit that does not restart (the tree GA).
+    pub fit_runs: usize,
 }
 
 /// The reverse-mode derivative of one generated mesh: maps dL/d(positions) to dL/d(params).

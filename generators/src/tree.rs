@@ -1254,6 +1254,8 @@ impl Generator for TreeGenerator {
             display_name: "Tree",
             fitted_lod: Lod::Low,
             mask_extra: crate::MaskExtra::TreeLabels,
+            // The tree GA is one search; its budget is its effort.
+            fit_runs: 1,
         }
     }
     fn generate(&self, params: &[f64], lod: Lod) -> Result<Mesh, GenError> {

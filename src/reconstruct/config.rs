@@ -22,16 +22,6 @@ pub const MAX_RESTARTS: usize = 16;
 /// [`FitConfig::restarts`] by default: the best of three runs (see its doc for the measurement).
 pub const DEFAULT_RESTARTS: usize = 3;
 
-/// [`FitConfig::restarts_for`] a building: the best of six runs. A building run is cheap (about
-/// 1 s natively) and one from a photo often ends in the wrong footprint's basin at several times
-/// the loss of the right one (an L read as a box: loss 0.011 against 0.004). On the independent
-/// building benchmark (`cargo bench --bench building_bench`, 10 buildings, quality 1) mean
-/// IoU-64 went, with 3 → 6 → 9 runs: masks 0.934 → 0.940 → 0.905, plain ground 0.865 → 0.917 →
-/// 0.907, gradient 0.893 → 0.908 → 0.905, textured 0.849 → 0.870 → 0.866. Beyond six, lower
-/// losses start to mean worse buildings (a box's depth is what one view tells least: flat-block
-/// 0.880 → 0.598 at a lower loss).
-pub const BUILDING_RESTARTS: usize = 6;
-
 /// Largest [`FitConfig::quality`] a fit takes, from the page's slider and the CLI alike (16 ×
 /// the default budget is already minutes of work a run).
 pub const MAX_QUALITY: f64 = 16.0;
@@ -137,16 +127,15 @@ pub(super) struct Plan {
 impl FitConfig {
     /// The runs a fit of `generator` (a name, or `auto`) at `quality` makes unless told
     /// otherwise, the one policy of the page, the CLI and the benches: one below
-    /// [`QUICK_QUALITY`] (a quick preview), else [`BUILDING_RESTARTS`] for a building and
-    /// [`DEFAULT_RESTARTS`] for anything else.
+    /// [`QUICK_QUALITY`] (a quick preview), else the generator's own number
+    /// ([`Capabilities::fit_runs`](crate::generators::Capabilities::fit_runs): six for a
+    /// building, three for a dish), and [`DEFAULT_RESTARTS`] for `auto` or an unknown name.
     pub fn restarts_for(generator: &str, quality: f64) -> usize {
         if quality < QUICK_QUALITY {
-            1
-        } else if generator == crate::generators::building::Building.name() {
-            BUILDING_RESTARTS
-        } else {
-            DEFAULT_RESTARTS
+            return 1;
         }
+        crate::generators::by_name(generator)
+            .map_or(DEFAULT_RESTARTS, |g| g.capabilities().fit_runs.max(1))
     }
 
     /// Stage-1 evaluations asked for: the budget, or [`DEFAULT_EVALUATIONS`] × quality.

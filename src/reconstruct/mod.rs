@@ -28,8 +28,8 @@ pub mod views;
 pub mod windows;
 
 pub use config::{
-    BUILDING_RESTARTS, DEFAULT_EVALUATIONS, DEFAULT_RESTARTS, FitConfig, MAX_QUALITY, MAX_RESTARTS,
-    MAX_VIEWS, QUICK_QUALITY,
+    DEFAULT_EVALUATIONS, DEFAULT_RESTARTS, FitConfig, MAX_QUALITY, MAX_RESTARTS, MAX_VIEWS,
+    QUICK_QUALITY,
 };
 pub use eval::{align_to_reference, iou64, normalized};
 pub use objective::{FitObjective, Layout, render_coverage, resample_mask};

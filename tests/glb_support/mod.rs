@@ -72,6 +72,7 @@ impl Generator for Prism {
             display_name: "Test prism",
             fitted_lod: Lod::Low,
             mask_extra: procfit::generators::MaskExtra::None,
+            fit_runs: 1,
         }
     }
     fn generate(&self, params: &[f64], lod: Lod) -> Result<Mesh, GenError> {
