@@ -48,7 +48,7 @@ impl Photo {
             return Err(SegmentError::new("the file is empty"));
         }
         check_complete(bytes)?;
-        if bytes.starts_with(&[0xFF, 0xD8, 0xFF]) {
+        if is_jpeg(bytes) {
             match decode_jpeg_scaled(bytes, working_side) {
                 Scaled::Done(photo) => return Ok(photo),
                 Scaled::Refused(e) => return Err(e),
@@ -85,7 +85,7 @@ impl Photo {
             .map_err(|e| SegmentError(format!("cannot decode the image: {e}")))?;
         let (w, h) = decoder.dimensions();
         check_source_size(w, h)?;
-        if bytes.starts_with(&[0xFF, 0xD8, 0xFF]) {
+        if is_jpeg(bytes) {
             // The component count is not known here: the bound that holds for any JPEG.
             check_jpeg_data_size(bytes.len(), w, h, false)?;
         }
@@ -300,6 +300,11 @@ fn decode_jpeg_scaled(bytes: &[u8], working_side: u32) -> Scaled {
     })
 }
 
+/// Whether `bytes` start like a JPEG file (start-of-image marker, then a marker).
+fn is_jpeg(bytes: &[u8]) -> bool {
+    bytes.starts_with(&[0xFF, 0xD8, 0xFF])
+}
+
 /// Refuses a JPEG that is cut off before its end. JPEG decoders fill the missing rows with grey
 /// and call it a success, so a truncated download would be segmented and fitted as if it were the
 /// photo. A complete JPEG has an end-of-image marker (FF D9) after its last start-of-scan marker
@@ -307,7 +312,7 @@ fn decode_jpeg_scaled(bytes: &[u8], working_side: u32) -> Scaled {
 /// neither can appear there by accident. (An EXIF thumbnail's markers come before the main
 /// image's scans.) PNG and WebP decoders already fail on truncated data.
 pub fn check_complete(bytes: &[u8]) -> Result<(), SegmentError> {
-    if !bytes.starts_with(&[0xFF, 0xD8, 0xFF]) {
+    if !is_jpeg(bytes) {
         return Ok(());
     }
     let last_scan = bytes.windows(2).rposition(|w| w == [0xFF, 0xDA]);
@@ -539,15 +544,7 @@ mod tests {
 
     #[test]
     fn a_truncated_jpeg_is_refused_and_a_complete_one_accepted() {
-        let mut jpeg = Vec::new();
-        let img =
-            image::RgbImage::from_fn(64, 48, |x, y| image::Rgb([x as u8 * 4, y as u8 * 5, 90]));
-        image::DynamicImage::ImageRgb8(img)
-            .write_to(
-                &mut std::io::Cursor::new(&mut jpeg),
-                image::ImageFormat::Jpeg,
-            )
-            .expect("encode");
+        let jpeg = small_photo_jpeg();
         assert!(Photo::decode(&jpeg, 512).is_ok());
         for keep in [jpeg.len() - 2, jpeg.len() * 95 / 100, jpeg.len() / 2, 700] {
             for decode in [Photo::decode, Photo::decode_full] {
@@ -562,6 +559,13 @@ mod tests {
         let mut padded = jpeg.clone();
         padded.extend_from_slice(b"trailing");
         assert!(Photo::decode(&padded, 512).is_ok());
+    }
+
+    /// A 64×48 colour gradient as a JPEG.
+    fn small_photo_jpeg() -> Vec<u8> {
+        let img =
+            image::RgbImage::from_fn(64, 48, |x, y| image::Rgb([x as u8 * 4, y as u8 * 5, 90]));
+        jpeg_of(image::DynamicImage::ImageRgb8(img))
     }
 
     /// `img` encoded as a JPEG by the `image` crate.
@@ -579,9 +583,7 @@ mod tests {
     fn a_jpeg_too_short_for_its_claimed_size_is_refused() {
         // A 64×48 photo whose frame header is edited to claim 8000×4000: the decoder would fill
         // 32 MP with grey from under a kilobyte of data and call it a photo.
-        let img =
-            image::RgbImage::from_fn(64, 48, |x, y| image::Rgb([x as u8 * 4, y as u8 * 5, 90]));
-        let mut jpeg = jpeg_of(image::DynamicImage::ImageRgb8(img));
+        let mut jpeg = small_photo_jpeg();
         let sof = jpeg
             .windows(2)
             .position(|w| w == [0xFF, 0xC0])
