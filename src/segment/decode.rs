@@ -619,6 +619,21 @@ mod tests {
     }
 
     #[test]
+    fn a_lossless_webp_with_an_overflowing_huffman_table_is_a_one_line_error() {
+        // Found by the `decode_photo` fuzzer: image-webp 0.2.4 overflows a u16 on this table
+        // and panics where overflow checks are on. The root Cargo.toml turns them off for
+        // image-webp in every profile, so each build refuses it as the release build does.
+        let webp = include_bytes!(
+            "../../fuzz/regressions/decode_photo/webp-lossless-huffman-table-overflows-u16-in-image-webp-0.2.4"
+        );
+        for decode in [Photo::decode, Photo::decode_full] {
+            let msg = decode(webp, 512).expect_err("a corrupt WebP").to_string();
+            assert!(msg.starts_with("cannot decode the image"), "{msg}");
+            assert_eq!(msg.lines().count(), 1, "{msg}");
+        }
+    }
+
+    #[test]
     fn target_size_keeps_aspect_and_never_enlarges() {
         assert_eq!(target_size(4000, 3000, 512), (512, 384));
         assert_eq!(target_size(3000, 4000, 512), (384, 512));
