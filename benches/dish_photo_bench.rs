@@ -12,7 +12,8 @@
 //! `-- --fov known` or `-- --fov unknown` only that row; `-- --threads N`; `-- NAME …` only
 //! those cases; `-- --dir DIR` reads another folder; `-- --save DIR` writes each case's
 //! automatic mask there (`NAME-auto.png`, the hard cut) beside the true one (`NAME-true.png`);
-//! `-- --masks` only segments (no fits): mask IoU, the share of extra and missing area, the
+//! `-- --masks` only segments (no fits): mask IoU, the same for what the fit takes as object
+//! (the mask without the small extras it ignores), the share of extra and missing area, the
 //! segmentation time (median of 5, one thread), confidence and warnings, and the mask
 //! plausibility measures ([`procfit::segment::plausible`]) of the automatic mask, of the true
 //! one and, with `-- --check DIR`, of the masks `DIR/NAME-auto.png` (say, an older version's).
@@ -185,10 +186,10 @@ fn masks_only(
     check: Option<&Path>,
 ) -> Result<(), Box<dyn std::error::Error>> {
     println!(
-        "| case | mask IoU | extra | missing | segment ms | confidence | overlap / edges: auto | true | checked (IoU) | warnings |"
+        "| case | mask IoU | fitted as object | extra | missing | segment ms | confidence | overlap / edges: auto | true | checked (IoU) | warnings |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|");
-    let (mut iou_sum, mut ms_sum) = (0.0, 0.0);
+    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    let (mut iou_sum, mut fit_sum, mut ms_sum) = (0.0, 0.0, 0.0);
     for d in dirs {
         let case = BenchCase::load(d)?;
         let mut times = Vec::new();
@@ -213,6 +214,25 @@ fn masks_only(
                 .save(out.join(format!("{}-auto.png", case.camera.name)))?;
         }
         let iou = procfit::dish_photo_bench::binary_iou(&seg.object, &case.mask);
+        // What the fit takes as object: the mask without the small extras it ignores
+        // (`reconstruct::extras`), those counted as not object.
+        let fitted = procfit::reconstruct::extras::without_extras(&seg.object);
+        let fitted = procfit::mask::Mask::new(
+            fitted.width(),
+            fitted.height(),
+            fitted
+                .values()
+                .iter()
+                .map(|&v| {
+                    if v == procfit::mask::Mask::DONT_CARE {
+                        0.0
+                    } else {
+                        v
+                    }
+                })
+                .collect(),
+        )?;
+        let fit_iou = procfit::dish_photo_bench::binary_iou(&fitted, &case.mask);
         let (mut extra, mut missing, mut truth) = (0usize, 0usize, 0usize);
         for (&a, &t) in seg.object.values().iter().zip(case.mask.values()) {
             let (a, t) = (a >= 0.5, t >= 0.5);
@@ -253,7 +273,7 @@ fn masks_only(
             None => "–".into(),
         };
         println!(
-            "| {} | {iou:.3} | {:.1} % | {:.1} % | {:.0} | {:.2} | {} | {} | {checked} | {} |",
+            "| {} | {iou:.3} | {fit_iou:.3} | {:.1} % | {:.1} % | {:.0} | {:.2} | {} | {} | {checked} | {} |",
             case.camera.name,
             pct(extra),
             pct(missing),
@@ -264,12 +284,14 @@ fn masks_only(
             seg.warnings.join(" / ")
         );
         iou_sum += iou;
+        fit_sum += fit_iou;
         ms_sum += times[2];
     }
     let n = dirs.len().max(1) as f64;
     println!(
-        "| **mean** | {:.3} | | | {:.0} | | |",
+        "| **mean** | {:.3} | {:.3} | | | {:.0} | | |",
         iou_sum / n,
+        fit_sum / n,
         ms_sum / n
     );
     Ok(())
