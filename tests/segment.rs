@@ -997,7 +997,11 @@ fn bad_files_are_refused_with_a_message() {
     check_refused(&png(&[0, 0, 0], 1, 1, ExtendedColorType::Rgb8), "too small");
     check_refused(&png_claiming(0, 64), "cannot decode");
     check_refused(&png_claiming(20_000, 20_000), "decompression bomb");
-    check_refused(&png_claiming(40_000, 100), "cannot decode");
+    // Refused from its header, before any pixel is decoded, saying which limit.
+    check_refused(
+        &png_claiming(40_000, 100),
+        "a side exceeds the 30000 pixel limit",
+    );
     assert!(
         Photo::from_rgba(10, 10, &[0; 399], WORKING_SIDE)
             .unwrap_err()
