@@ -3,7 +3,7 @@
 //! building (a non-preset one), each from one 512² mask, on 1 and 2 threads. Prints a markdown
 //! table of medians over several random cameras. Run with `cargo bench --bench reconstruct`;
 //! `-- WORD …` runs only the objects whose name contains one of the words (`-- building`);
-//! `-- --threads N` runs one thread count only; `-- --each` prints a line per camera (its yaw
+//! `-- --threads N` runs one thread count only; `-- --cameras N` fits N cameras (4); `-- --each` prints a line per camera (its yaw
 //! and elevation, the IoU-64 and the fitted parameters).
 #![allow(
     clippy::unwrap_used,
@@ -20,7 +20,7 @@ use procfit::reconstruct::FitConfig;
 use std::time::Instant;
 use support::*;
 
-/// Random cameras per object (each fitted once per thread count).
+/// Random cameras per object (each fitted once per thread count); `-- --cameras N` for more.
 const CAMERAS: usize = 4;
 // PROCFIT_QUALITY=q scales the budget (default 1).
 const SIDE: u32 = 512;
@@ -48,20 +48,28 @@ fn main() {
         .position(|a| a == "--threads")
         .and_then(|i| args.get(i + 1))
         .map(|n| n.parse().expect("--threads N"));
+    let cameras: usize = args
+        .iter()
+        .position(|a| a == "--cameras")
+        .and_then(|i| args.get(i + 1))
+        .map_or(CAMERAS, |n| n.parse().expect("--cameras N"));
     let words: Vec<String> = args
         .iter()
         .enumerate()
-        .filter(|&(i, a)| !a.starts_with('-') && (i == 0 || args[i - 1] != "--threads"))
+        .filter(|&(i, a)| {
+            !a.starts_with('-')
+                && (i == 0 || !matches!(args[i - 1].as_str(), "--threads" | "--cameras"))
+        })
         .map(|(_, a)| a.clone())
         .collect();
     let wanted = |name: &str| words.is_empty() || words.iter().any(|w| name.contains(w.as_str()));
     println!(
-        "| object | threads | wall time median (min–max) over {CAMERAS} cameras | evaluations | IoU-64 mean (min–max) |"
+        "| object | threads | wall time median (min–max) over {cameras} cameras | evaluations | IoU-64 mean (min–max) |"
     );
     println!("|---|---|---|---|---|");
     for (name, g, mesh) in &cases {
         // The cameras are drawn for every object, so a filtered run sees the same ones.
-        let truths: Vec<_> = (0..CAMERAS)
+        let truths: Vec<_> = (0..cameras)
             .map(|_| random_view_at(&mut rng, mesh, 0.5, 0.0))
             .collect();
         if !wanted(name) {

@@ -259,7 +259,9 @@ fn measured_mug_from_obj_reconstructs() {
 /// Issue 16's one-photo ambiguity: a mug whose handle is turned 27° towards the camera. Its
 /// silhouette is matched as well by a pinched handle seen side-on, which the fit used to keep
 /// (IoU-64 0.764); among restarts that tie, the fit now keeps the most cup-like handle
-/// ([`Generator::tie_prior`](procfit::generators::Generator::tie_prior)): measured 0.895.
+/// ([`Generator::tie_prior`](procfit::generators::Generator::tie_prior)): measured 0.895 with
+/// three runs, 0.966 with the dish's five (`Capabilities::fit_runs`), which give the tie-break
+/// both halves of the ambiguity to choose from more often.
 #[test]
 fn a_handle_turned_towards_the_camera_is_not_fitted_side_on() {
     let mesh = measured_mug();
@@ -270,11 +272,12 @@ fn a_handle_turned_towards_the_camera_is_not_fitted_side_on() {
         .last()
         .unwrap();
     let mask = render_mask(&mesh, &truth, 512);
-    // The default budget, as the bench and the CLI fit.
+    // The default budget and runs, as the bench, the page and the CLI fit.
     let r = fit(
         FitConfig {
             generator: "dish".into(),
             fov_y: vec![Some(0.5)],
+            restarts: FitConfig::restarts_for("dish", 1.0),
             ..FitConfig::default()
         },
         vec![mask],
@@ -284,7 +287,7 @@ fn a_handle_turned_towards_the_camera_is_not_fitted_side_on() {
         "turned handle: IoU-64 {iou:.4}, yaw {:.3} (truth {:.3})",
         r.views[0].params.yaw, truth.yaw
     );
-    assert!(iou >= 0.87, "turned handle: IoU-64 {iou:.4} < 0.87");
+    assert!(iou >= 0.93, "turned handle: IoU-64 {iou:.4} < 0.93");
 }
 
 /// The value of the fitted parameter `name`.
@@ -492,9 +495,9 @@ fn a_quick_fit_is_one_run_for_the_page_and_the_cli_alike() {
         assert_eq!(FitConfig::restarts_for(g, QUICK_QUALITY * 0.99), 1);
     }
     for q in [QUICK_QUALITY, 3.0] {
-        assert_eq!(FitConfig::restarts_for("dish", q), DEFAULT_RESTARTS);
         assert_eq!(FitConfig::restarts_for("auto", q), DEFAULT_RESTARTS);
         // The generator's own number, from its capabilities.
+        assert_eq!(FitConfig::restarts_for("dish", q), 5);
         assert_eq!(FitConfig::restarts_for("building", q), 6);
         assert_eq!(FitConfig::restarts_for("tree", q), 1);
     }

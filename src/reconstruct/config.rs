@@ -129,7 +129,7 @@ impl FitConfig {
     /// otherwise, the one policy of the page, the CLI and the benches: one below
     /// [`QUICK_QUALITY`] (a quick preview), else the generator's own number
     /// ([`Capabilities::fit_runs`](crate::generators::Capabilities::fit_runs): six for a
-    /// building, three for a dish), and [`DEFAULT_RESTARTS`] for `auto` or an unknown name.
+    /// building, five for a dish), and [`DEFAULT_RESTARTS`] for `auto` or an unknown name.
     pub fn restarts_for(generator: &str, quality: f64) -> usize {
         if quality < QUICK_QUALITY {
             return 1;
