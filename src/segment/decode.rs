@@ -493,7 +493,8 @@ fn area_weights(src: u32, dst: u32) -> Vec<(usize, Vec<f32>)> {
 /// the same a source row at a time.
 pub fn area_resample(src: &[u8], w: u32, h: u32, ch: usize, tw: u32, th: u32) -> (Vec<u8>, bool) {
     let mut r = AreaResampler::new(w, h, ch, tw, th);
-    for line in src.chunks_exact(w as usize * ch).take(h as usize) {
+    // `max(1)`: an empty image (no caller passes one) gives an empty result, not a panic.
+    for line in src.chunks_exact((w as usize * ch).max(1)).take(h as usize) {
         r.push_row(line);
     }
     r.finish()
@@ -713,6 +714,10 @@ mod tests {
         let (out, alpha) = area_resample(&src, 2, 1, 4, 1, 1);
         assert_eq!(out, vec![0, 255, 0, 128]);
         assert!(alpha);
+        // Degenerate sizes are empty or transparent, never a panic.
+        assert_eq!(area_resample(&[], 0, 0, 3, 0, 0).0.len(), 0);
+        assert_eq!(area_resample(&[], 0, 4, 3, 2, 2).0, vec![0; 16]);
+        assert_eq!(area_resample(&[], 4, 0, 3, 2, 2).0, vec![0; 16]);
     }
 
     #[test]
