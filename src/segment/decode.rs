@@ -225,12 +225,7 @@ fn decode_jpeg_scaled(bytes: &[u8], working_side: u32) -> Scaled {
         return Scaled::NotApplicable;
     };
     let (w, h) = (u32::from(info.width), u32::from(info.height));
-    if w > MAX_DECODE_SIDE || h > MAX_DECODE_SIDE {
-        return Scaled::Refused(SegmentError(format!(
-            "the image is {w}×{h}: a side exceeds the {MAX_DECODE_SIDE} pixel limit"
-        )));
-    }
-    if let Err(e) = check_source_size(w, h) {
+    if let Err(e) = check_header_size(w, h) {
         return Scaled::Refused(e);
     }
     let grey = info.pixel_format == jpeg_decoder::PixelFormat::L8;
@@ -302,12 +297,7 @@ fn decode_png_rows(bytes: &[u8], working_side: u32) -> Scaled {
         Ok(info) => (info.width, info.height),
         Err(_) => return Scaled::NotApplicable,
     };
-    if w > MAX_DECODE_SIDE || h > MAX_DECODE_SIDE {
-        return Scaled::Refused(SegmentError(format!(
-            "the image is {w}×{h}: a side exceeds the {MAX_DECODE_SIDE} pixel limit"
-        )));
-    }
-    if let Err(e) = check_source_size(w, h) {
+    if let Err(e) = check_header_size(w, h) {
         return Scaled::Refused(e);
     }
     // As the `image` crate reads a PNG: palettes and low bit depths expanded to 8 bits.
@@ -435,6 +425,17 @@ fn check_working_side(side: u32) -> Result<(), SegmentError> {
     Ok(())
 }
 
+/// The size a file's header claims, checked before any pixel is decoded: each side within
+/// [`MAX_DECODE_SIDE`] (the full decode's `image::Limits`), then [`check_source_size`].
+fn check_header_size(w: u32, h: u32) -> Result<(), SegmentError> {
+    if w > MAX_DECODE_SIDE || h > MAX_DECODE_SIDE {
+        return Err(SegmentError(format!(
+            "the image is {w}×{h}: a side exceeds the {MAX_DECODE_SIDE} pixel limit"
+        )));
+    }
+    check_source_size(w, h)
+}
+
 fn check_source_size(w: u32, h: u32) -> Result<(), SegmentError> {
     if w == 0 || h == 0 {
         return Err(SegmentError(format!("the image is empty ({w}×{h})")));
@@ -506,59 +507,55 @@ pub fn area_resample(src: &[u8], w: u32, h: u32, ch: usize, tw: u32, th: u32) ->
 pub struct AreaResampler {
     w: usize,
     ch: usize,
-    tw: usize,
-    th: usize,
-    /// Per output column: the first source column and the area weights from there.
-    xw: Vec<(usize, Vec<f32>)>,
-    /// Per output row: the first source row and the area weights from there.
-    yw: Vec<(usize, Vec<f32>)>,
-    /// The first output row the next source row can feed (rows are pushed in order).
-    oy0: usize,
-    /// The next source row.
-    y: usize,
-    /// Premultiplied r, g, b and alpha per output pixel; the RGBA8 output itself when the size
-    /// does not change.
-    acc: Vec<f32>,
-    row: Vec<f32>,
-    same: Vec<u8>,
     has_alpha: bool,
+    mode: Resampling,
+}
+
+/// What [`AreaResampler`] does with each row.
+enum Resampling {
+    /// The size does not change: the RGBA8 output, converted a row at a time.
+    Same(Vec<u8>),
+    /// Area averaging.
+    Area {
+        tw: usize,
+        /// Per output column: the first source column and the area weights from there.
+        xw: Vec<(usize, Vec<f32>)>,
+        /// Per output row: the first source row and the area weights from there.
+        yw: Vec<(usize, Vec<f32>)>,
+        /// The first output row the next source row can feed (rows arrive in order).
+        oy0: usize,
+        /// The next source row.
+        y: usize,
+        /// Premultiplied r, g, b and alpha per output pixel.
+        acc: Vec<f32>,
+        /// The current source row averaged across, per output column.
+        row: Vec<f32>,
+    },
 }
 
 impl AreaResampler {
     /// A resampler from `w × h` source pixels of `ch` channels (1 grey, 2 grey + alpha, 3 RGB,
     /// 4 RGBA) to `tw × th` RGBA.
     pub fn new(w: u32, h: u32, ch: usize, tw: u32, th: u32) -> AreaResampler {
-        let same = (tw, th) == (w, h);
         let (tw_, th_) = (tw as usize, th as usize);
+        let mode = if (tw, th) == (w, h) {
+            Resampling::Same(Vec::with_capacity(tw_ * th_ * 4))
+        } else {
+            Resampling::Area {
+                tw: tw_,
+                xw: area_weights(w, tw),
+                yw: area_weights(h, th),
+                oy0: 0,
+                y: 0,
+                acc: vec![0.0; tw_ * th_ * 4],
+                row: vec![0.0; tw_ * 4],
+            }
+        };
         AreaResampler {
             w: w as usize,
             ch,
-            tw: tw_,
-            th: th_,
-            xw: if same {
-                Vec::new()
-            } else {
-                area_weights(w, tw)
-            },
-            yw: if same {
-                Vec::new()
-            } else {
-                area_weights(h, th)
-            },
-            oy0: 0,
-            y: 0,
-            acc: if same {
-                Vec::new()
-            } else {
-                vec![0.0; tw_ * th_ * 4]
-            },
-            row: if same { Vec::new() } else { vec![0.0; tw_ * 4] },
-            same: if same {
-                Vec::with_capacity(tw_ * th_ * 4)
-            } else {
-                Vec::new()
-            },
             has_alpha: false,
+            mode,
         }
     }
 
@@ -584,54 +581,63 @@ impl AreaResampler {
     }
 
     fn push<const CH: usize>(&mut self, line: &[u8]) {
-        let ch = CH;
-        let Some(line) = line.get(..self.w * ch) else {
+        let Some(line) = line.get(..self.w * CH) else {
             return;
         };
-        if matches!(ch, 2 | 4) && !self.has_alpha {
-            self.has_alpha = line.chunks_exact(ch).any(|p| p[ch - 1] < 255);
+        if matches!(CH, 2 | 4) && !self.has_alpha {
+            self.has_alpha = line.chunks_exact(CH).any(|p| p[CH - 1] < 255);
         }
-        let y = self.y;
-        self.y += 1;
-        if self.acc.is_empty() {
-            for p in line.chunks_exact(ch) {
-                self.same.extend(Self::to_rgba(ch, p).map(|v| v as u8));
+        let (tw, xw, yw, oy0, y, acc, row) = match &mut self.mode {
+            Resampling::Same(out) => {
+                for p in line.chunks_exact(CH) {
+                    out.extend(Self::to_rgba(CH, p).map(|v| v as u8));
+                }
+                return;
             }
-            return;
-        }
+            Resampling::Area {
+                tw,
+                xw,
+                yw,
+                oy0,
+                y,
+                acc,
+                row,
+            } => (*tw, xw, yw, oy0, y, acc, row),
+        };
+        let sy = *y;
+        *y += 1;
         // The output rows this source row feeds: consecutive, from the first whose span
         // reaches it.
-        while self.oy0 < self.th && {
-            let (first, ws) = &self.yw[self.oy0];
-            first + ws.len() <= y
-        } {
-            self.oy0 += 1;
+        while yw
+            .get(*oy0)
+            .is_some_and(|(first, ws)| first + ws.len() <= sy)
+        {
+            *oy0 += 1;
         }
-        let mut computed = false;
-        for oy in self.oy0..self.th {
-            let (first, ws) = &self.yw[oy];
-            if *first > y {
-                break;
+        let fed = yw[*oy0..]
+            .iter()
+            .take_while(|(first, _)| *first <= sy)
+            .count();
+        if fed == 0 {
+            return;
+        }
+        for (ox, (first, ws)) in xw.iter().enumerate() {
+            let mut s = [0.0f32; 4];
+            for (k, &wx) in ws.iter().enumerate() {
+                let x = first + k;
+                let p = Self::to_rgba(CH, &line[x * CH..x * CH + CH]);
+                let a = p[3] * wx;
+                s[0] += p[0] * a;
+                s[1] += p[1] * a;
+                s[2] += p[2] * a;
+                s[3] += a;
             }
-            let wt = ws[y - first];
-            if !computed {
-                for (ox, (first, ws)) in self.xw.iter().enumerate() {
-                    let mut s = [0.0f32; 4];
-                    for (k, &wx) in ws.iter().enumerate() {
-                        let x = first + k;
-                        let p = Self::to_rgba(ch, &line[x * ch..x * ch + ch]);
-                        let a = p[3] * wx;
-                        s[0] += p[0] * a;
-                        s[1] += p[1] * a;
-                        s[2] += p[2] * a;
-                        s[3] += a;
-                    }
-                    self.row[ox * 4..ox * 4 + 4].copy_from_slice(&s);
-                }
-                computed = true;
-            }
-            let dst = &mut self.acc[oy * self.tw * 4..(oy + 1) * self.tw * 4];
-            for (d, r) in dst.iter_mut().zip(&self.row) {
+            row[ox * 4..ox * 4 + 4].copy_from_slice(&s);
+        }
+        for (oy, (first, ws)) in yw.iter().enumerate().skip(*oy0).take(fed) {
+            let wt = ws[sy - first];
+            let dst = &mut acc[oy * tw * 4..(oy + 1) * tw * 4];
+            for (d, r) in dst.iter_mut().zip(row.iter()) {
                 *d += r * wt;
             }
         }
@@ -639,11 +645,11 @@ impl AreaResampler {
 
     /// The RGBA8 output and whether any source pixel had alpha below 255.
     pub fn finish(self) -> (Vec<u8>, bool) {
-        if self.acc.is_empty() {
-            return (self.same, self.has_alpha);
-        }
-        let out = self
-            .acc
+        let acc = match self.mode {
+            Resampling::Same(out) => return (out, self.has_alpha),
+            Resampling::Area { acc, .. } => acc,
+        };
+        let out = acc
             .chunks_exact(4)
             .flat_map(|p| {
                 let a = p[3];
