@@ -3,8 +3,9 @@
 //! building (a non-preset one), each from one 512² mask, on 1 and 2 threads. Prints a markdown
 //! table of medians over several random cameras. Run with `cargo bench --bench reconstruct`;
 //! `-- WORD …` runs only the objects whose name contains one of the words (`-- building`);
-//! `-- --threads N` runs one thread count only; `-- --cameras N` fits N cameras (4); `-- --each` prints a line per camera (its yaw
-//! and elevation, the IoU-64 and the fitted parameters).
+//! `-- --threads N` runs one thread count only; `-- --cameras N` fits N cameras (4);
+//! `-- --each` prints a line per camera (its yaw and elevation, the IoU-64 and the fitted
+//! parameters) and per run (loss, tie prior, fitted yaw, IoU-64).
 #![allow(
     clippy::unwrap_used,
     clippy::expect_used,
@@ -43,16 +44,17 @@ fn main() {
     ];
     let args: Vec<String> = std::env::args().skip(1).collect();
     let each = args.iter().any(|a| a == "--each");
-    let only_threads: Option<usize> = args
-        .iter()
-        .position(|a| a == "--threads")
-        .and_then(|i| args.get(i + 1))
-        .map(|n| n.parse().expect("--threads N"));
-    let cameras: usize = args
-        .iter()
-        .position(|a| a == "--cameras")
-        .and_then(|i| args.get(i + 1))
-        .map_or(CAMERAS, |n| n.parse().expect("--cameras N"));
+    // The number after `flag`, if given.
+    let number = |flag: &str| -> Option<usize> {
+        let i = args.iter().position(|a| a == flag)?;
+        Some(
+            args.get(i + 1)?
+                .parse()
+                .unwrap_or_else(|_| panic!("{flag} N")),
+        )
+    };
+    let only_threads = number("--threads");
+    let cameras = number("--cameras").unwrap_or(CAMERAS);
     let words: Vec<String> = args
         .iter()
         .enumerate()
