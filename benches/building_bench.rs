@@ -11,7 +11,8 @@
 //! `cargo bench --bench building_bench` runs everything; `-- --quick` at quality 0.4;
 //! `-- NAME …` only those cases (`paper` for the paper's building); `-- --inputs mask,plain`
 //! only those inputs; `-- --paper-obj PATH` reads the paper's building from elsewhere;
-//! `-- --save DIR` also writes each case's photos and masks there as PNG.
+//! `-- --save DIR` also writes each case's photos and masks there as PNG; `-- --each` prints
+//! every run of each fit (loss, tie prior, IoU-64, main shape parameters) after its row.
 
 use procfit::building_bench::{
     BenchScore, Input, PAPER_CAMERAS, case_view, cases, fit_and_score, fit_and_score_input,
@@ -25,6 +26,7 @@ type Row = (f64, f64, f64);
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let quick = args.iter().any(|a| a == "--quick");
+    let each = args.iter().any(|a| a == "--each");
     let mut paper_obj = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../shared/data/paper/building_test_2_original.obj");
     if !paper_obj.exists() {
@@ -81,6 +83,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         s.iou64,
                         s.photo_iou
                     );
+                    print_runs(&s);
                     let row = (s.iou64, s.photo_iou, secs);
                     match sums.iter_mut().find(|x| x.0 == input) {
                         Some(x) => x.1.push(row),
@@ -99,7 +102,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         for &input in &inputs {
             run(case.name, case.kind, input, &|| {
-                fit_and_score_input(&case.mesh, &case.view, input, quality)
+                fit_and_score_input(&case.mesh, &case.view, input, quality, each)
             });
         }
     }
@@ -131,15 +134,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     let t = std::time::Instant::now();
                     let r = pool.install(|| {
                         let mask = input_mask(&mesh, &view, Input::Mask)?;
-                        fit_and_score(&mesh, &view, mask, quality)
+                        fit_and_score(&mesh, &view, mask, quality, each)
                     });
                     match r {
-                        Ok(s) => println!(
-                            "| {yaw:.0}, {pitch:.0} | mask | {:.3} | {:.3} | {:.1} |",
-                            s.iou64,
-                            s.photo_iou,
-                            t.elapsed().as_secs_f64()
-                        ),
+                        Ok(s) => {
+                            println!(
+                                "| {yaw:.0}, {pitch:.0} | mask | {:.3} | {:.3} | {:.1} |",
+                                s.iou64,
+                                s.photo_iou,
+                                t.elapsed().as_secs_f64()
+                            );
+                            print_runs(&s);
+                        }
                         Err(e) => println!("| {yaw:.0}, {pitch:.0} | mask | failed: {e} | 0 | |"),
                     }
                 }
@@ -147,6 +153,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     Ok(())
+}
+
+/// With `--each`, the runs of a fit on stderr, the kept one marked.
+fn print_runs(s: &BenchScore) {
+    for (k, r) in s.runs.iter().enumerate() {
+        eprintln!(
+            "    run {k}{}: loss {:.5}, tie prior {:.3}, IoU-64 {:.3}, {}",
+            if r.kept { " (kept)" } else { "" },
+            r.loss,
+            r.tie_prior,
+            r.iou64,
+            r.shape
+        );
+    }
 }
 
 /// Writes the photos of a case and the masks the fit gets (object white, background black,

@@ -21,7 +21,8 @@
 //! *above*) and the height over the rim's diameter of the fit and of the truth
 //! ([`procfit::dish_photo_bench::rim_aspect`]); with `PROCFIT_DISH_DUMP=DIR` in the
 //! environment each fit's parameters are written to `DIR/NAME.params` (name and value a line, then
-//! `loss` and the fit's final loss).
+//! `loss` and the fit's final loss). `-- --each` prints every run of each fit on stderr (loss,
+//! tie prior, IoU-64, elevation, height over rim diameter; the kept one marked).
 
 use procfit::bench_cases::case_dirs;
 use procfit::dish_photo_bench::{BenchCase, auto_segmentation, fit_case, truth_check};
@@ -31,6 +32,7 @@ use std::path::{Path, PathBuf};
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let quick = args.iter().any(|a| a == "--quick");
+    let each = args.iter().any(|a| a == "--each");
     let mut dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/dish-photo-bench");
     let mut names = Vec::new();
     let mut fovs = vec![true, false];
@@ -109,7 +111,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         for &known in &fovs {
             let fov = known.then_some(c.fov_y);
             let t = std::time::Instant::now();
-            let r = pool.install(|| fit_case(&case, fov, quality));
+            let r = pool.install(|| fit_case(&case, fov, quality, each));
             let secs = t.elapsed().as_secs_f64();
             let which = if known { "known" } else { "unknown" };
             let setting = format!(
@@ -143,6 +145,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         s.fitted_aspect,
                         s.true_aspect,
                     );
+                    for (k, r) in s.runs.iter().enumerate() {
+                        eprintln!(
+                            "    {} run {k}{}: loss {:.3e}, tie prior {:.3}, IoU-64 {:.3}, elevation {:.0}°, height/rim {:.2}, photo-view IoU {:.4}, against the hard cut {:.4}",
+                            c.name,
+                            if r.kept { " (kept)" } else { "" },
+                            r.loss,
+                            r.tie_prior,
+                            r.iou64,
+                            r.elevation_deg,
+                            r.aspect,
+                            r.photo_iou,
+                            r.cut_iou
+                        );
+                    }
                     let row = [s.mask_iou, s.iou64, s.photo_iou, secs];
                     match sums.iter_mut().find(|x| x.0 == known) {
                         Some(x) => x.1.push(row),

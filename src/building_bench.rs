@@ -21,12 +21,13 @@
 //! cases at a reduced budget.
 
 use crate::camera::{View, ViewParams};
+use crate::generators::building::idx;
 use crate::generators::{Generator, Lod, Mesh, Part};
 use crate::mask::Mask;
 use crate::reconstruct::eval::view_iou;
 use crate::reconstruct::views::{ViewVars, camera_pose};
 use crate::reconstruct::{
-    FitConfig, FitError, Session, align_to_reference, iou64, render_coverage,
+    FitConfig, FitError, FitResult, Session, align_to_reference, iou64, render_coverage,
 };
 use crate::render::labels::LabelRenderer;
 use crate::segment::{self, Photo};
@@ -760,8 +761,23 @@ pub fn input_mask(mesh: &Mesh, view: &View, input: Input) -> Result<Mask, FitErr
     }
 }
 
+/// One run of a fit's restarts ([`BenchScore::runs`]): what it found and how it scores.
+#[derive(Clone, Debug)]
+pub struct RunScore {
+    /// Its final loss.
+    pub loss: f64,
+    /// Its [`Generator::tie_prior`].
+    pub tie_prior: f64,
+    /// The paper's IoU-64 against the truth, as [`BenchScore::iou64`].
+    pub iou64: f64,
+    /// Whether the fit kept this run.
+    pub kept: bool,
+    /// Its main shape parameters, `name=value` separated by spaces.
+    pub shape: String,
+}
+
 /// The scores of one fit.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct BenchScore {
     /// The paper's IoU-64 against the truth (128², the fit at HIGH in the truth's frame).
     pub iou64: f64,
@@ -771,17 +787,21 @@ pub struct BenchScore {
     /// photo ([`crate::colors::estimate`]) against the colours the photo was drawn with
     /// (`None` where the fitted model has no such part in view).
     pub colour_de: Option<(Option<f64>, Option<f64>)>,
+    /// Every run of the fit, when asked for (`each`); empty otherwise.
+    pub runs: Vec<RunScore>,
 }
 
 /// Fits `mask` as the CLI does with the building generator (the field of view known), `quality`
 /// scaling every stage's budget, and scores it against `truth` seen through `view`.
+/// With `each`, every run of the fit is scored too ([`BenchScore::runs`]).
 pub fn fit_and_score(
     truth: &Mesh,
     view: &View,
     mask: Mask,
     quality: f64,
+    each: bool,
 ) -> Result<BenchScore, FitError> {
-    fit_scored(truth, view, mask, quality, None)
+    fit_scored(truth, view, mask, quality, None, each)
 }
 
 /// [`fit_and_score`] from `input` made of `truth` through `view` ([`input_mask`]), and for a
@@ -791,13 +811,14 @@ pub fn fit_and_score_input(
     view: &View,
     input: Input,
     quality: f64,
+    each: bool,
 ) -> Result<BenchScore, FitError> {
     if input == Input::Mask {
-        return fit_and_score(truth, view, true_mask(truth, view)?, quality);
+        return fit_and_score(truth, view, true_mask(truth, view)?, quality, each);
     }
     let px = photo(truth, view, input)?;
     let mask = segmented(view, &px)?;
-    fit_scored(truth, view, mask, quality, Some(&px))
+    fit_scored(truth, view, mask, quality, Some(&px), each)
 }
 
 fn fit_scored(
@@ -806,6 +827,7 @@ fn fit_scored(
     mask: Mask,
     quality: f64,
     photo: Option<&[u8]>,
+    each: bool,
 ) -> Result<BenchScore, FitError> {
     let for_colours = mask.clone();
     let generator = crate::generators::building::Building.name();
@@ -816,21 +838,42 @@ fn fit_scored(
         restarts: FitConfig::restarts_for(generator, quality),
         ..FitConfig::default()
     };
-    let result = Session::new(config, vec![mask])?.run()?;
-    let g = result.model.generator;
-    let mesh = g
-        .generate(&result.model.params, Lod::High)
-        .map_err(|e| FitError(e.to_string()))?;
+    let mut session = Session::new(config, vec![mask])?;
+    let result = session.run()?;
+    let (iou, mesh) = fit_iou64(&result, truth, view)?;
     let fitted = result
         .views
         .first()
         .ok_or_else(|| FitError("a fit without a view".into()))?;
-    let aligned = align_to_reference(&mesh.positions, &fitted.params, &view.params);
-    let iou = iou64(
-        (&aligned, &mesh.triangles),
-        (&truth.positions, &truth.triangles),
-        128,
-    )?;
+    let mut runs = Vec::new();
+    if each {
+        for run in session.run_results().into_iter().flatten() {
+            let p = &run.model.params;
+            let shape = [
+                ("floors", idx::FLOORS),
+                ("depth", idx::DEPTH),
+                ("floor_h", idx::FLOOR_HEIGHT),
+                ("roof", idx::ROOF_TYPE),
+                ("pitch", idx::ROOF_PITCH),
+                ("overhang", idx::ROOF_OVERHANG),
+                ("footprint", idx::FOOTPRINT),
+                ("wing", idx::WING_LENGTH),
+                ("wing_w", idx::WING_WIDTH),
+                ("balcony_start", idx::BALCONY_START),
+            ]
+            .iter()
+            .map(|(n, i)| format!("{n}={:.2}", p[*i]))
+            .collect::<Vec<_>>()
+            .join(" ");
+            runs.push(RunScore {
+                loss: run.loss,
+                tie_prior: run.model.generator.tie_prior(p),
+                iou64: fit_iou64(run, truth, view)?.0,
+                kept: run.loss == result.loss && *p == result.model.params,
+                shape,
+            });
+        }
+    }
     let photo_iou = view_iou(&mesh, fitted, &true_mask(truth, view)?)?;
     let colour_de = match photo {
         None => None,
@@ -856,7 +899,29 @@ fn fit_scored(
         iou64: iou,
         photo_iou,
         colour_de,
+        runs,
     })
+}
+
+/// The paper's IoU-64 of `fit` against `truth` (the fit moved into the truth's frame through
+/// `view`, 128²), and the fitted mesh.
+fn fit_iou64(fit: &FitResult, truth: &Mesh, view: &View) -> Result<(f64, Mesh), FitError> {
+    let mesh = fit
+        .model
+        .generator
+        .generate(&fit.model.params, Lod::High)
+        .map_err(|e| FitError(e.to_string()))?;
+    let fitted = fit
+        .views
+        .first()
+        .ok_or_else(|| FitError("a fit without a view".into()))?;
+    let aligned = align_to_reference(&mesh.positions, &fitted.params, &view.params);
+    let iou = iou64(
+        (&aligned, &mesh.triangles),
+        (&truth.positions, &truth.triangles),
+        128,
+    )?;
+    Ok((iou, mesh))
 }
 
 #[cfg(test)]

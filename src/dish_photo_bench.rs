@@ -26,7 +26,7 @@
 use crate::camera::{CameraPose, View, ViewParams};
 use crate::generators::{Generator, Lod, Mesh};
 use crate::mask::Mask;
-use crate::reconstruct::{FitConfig, FitError, Session, eval, iou64};
+use crate::reconstruct::{FitConfig, FitError, FitResult, Session, eval, iou64};
 use crate::segment::{self, Photo};
 use glam::{DVec3, Vec3};
 use serde::Deserialize;
@@ -226,6 +226,29 @@ pub struct BenchScore {
     pub fitted_aspect: f64,
     /// The same of the truth.
     pub true_aspect: f64,
+    /// Every run of the fit when asked for (`each`), in run order; empty otherwise.
+    pub runs: Vec<RunScore>,
+}
+
+/// One run of a fit's restarts ([`BenchScore::runs`]).
+#[derive(Clone, Debug)]
+pub struct RunScore {
+    /// Its final loss.
+    pub loss: f64,
+    /// Its [`Generator::tie_prior`].
+    pub tie_prior: f64,
+    /// Its IoU-64, as [`BenchScore::iou64`].
+    pub iou64: f64,
+    /// Its camera's elevation, as [`BenchScore::fitted_elevation_deg`].
+    pub elevation_deg: f64,
+    /// Its [`rim_aspect`].
+    pub aspect: f64,
+    /// Its photo-view IoU against the true silhouette, as [`BenchScore::photo_iou`].
+    pub photo_iou: f64,
+    /// Its photo-view IoU against the automatic mask's hard cut (no don't-care band).
+    pub cut_iou: f64,
+    /// Whether the fit kept it.
+    pub kept: bool,
 }
 
 /// A mesh's height over the diameter of its rim (the widest circle among its top 3 % in
@@ -270,11 +293,13 @@ pub fn auto_segmentation(case: &BenchCase) -> Result<segment::Segmentation, FitE
 
 /// Fits the case's photo as the CLI does (segmented automatically, the dish generator at the
 /// default settings, `fov_y` as `--fov` would give it, `None` as a PNG without EXIF) with
-/// `quality`, and scores it. The caller times it.
+/// `quality`, and scores it; with `each`, every run of the fit too ([`BenchScore::runs`]). The
+/// caller times it.
 pub fn fit_case(
     case: &BenchCase,
     fov_y: Option<f64>,
     quality: f64,
+    each: bool,
 ) -> Result<BenchScore, FitError> {
     let seg = auto_segmentation(case)?;
     if (seg.mask.width(), seg.mask.height()) != (case.mask.width(), case.mask.height()) {
@@ -293,21 +318,14 @@ pub fn fit_case(
         ..FitConfig::default()
     };
     let masks = vec![seg.mask.clone()];
-    let result = Session::new(config, masks.clone())?.run()?;
+    let mut session = Session::new(config, masks.clone())?;
+    let result = session.run()?;
     let mut warnings = seg.warnings.clone();
     let cli_ious = eval::result_photo_ious(&result, &masks)?;
     if let Some(w) = eval::photo_match_warning(&cli_ious, &["photo".into()]) {
         warnings.push(w);
     }
     let g = result.model.generator;
-    let mesh = g
-        .generate(&result.model.params, Lod::High)
-        .map_err(|x| FitError(x.to_string()))?;
-    let fitted = result
-        .views
-        .first()
-        .ok_or_else(|| FitError("a fit without a view".into()))?;
-    let moved = to_photo_frame(&mesh.positions, fitted, &case.view()?);
     if let Ok(dir) = std::env::var("PROCFIT_DISH_DUMP") {
         let names: Vec<String> = g
             .params()
@@ -321,25 +339,39 @@ pub fn fit_case(
             eprintln!("PROCFIT_DISH_DUMP: {}: {e}", path.display());
         }
     }
-    let iou = iou64(
-        (&moved, &mesh.triangles),
-        (&case.truth.positions, &case.truth.triangles),
-        128,
-    )?;
-    let photo_iou = eval::view_iou(&mesh, fitted, &binarised(&case.mask_full))?;
+    let kept = score_fit(case, &result)?;
+    let mut runs = Vec::new();
+    if each {
+        for run in session.run_results().into_iter().flatten() {
+            let s = score_fit(case, run)?;
+            let cut_iou = eval::result_photo_ious(run, std::slice::from_ref(&seg.object))?
+                .first()
+                .copied()
+                .unwrap_or(0.0);
+            runs.push(RunScore {
+                photo_iou: s.photo_iou,
+                cut_iou,
+                loss: run.loss,
+                tie_prior: g.tie_prior(&run.model.params),
+                iou64: s.iou64,
+                elevation_deg: s.elevation_deg,
+                aspect: s.aspect,
+                kept: run.loss == result.loss && run.model.params == result.model.params,
+            });
+        }
+    }
+    let photo_iou = kept.photo_iou;
+    let iou = kept.iou64;
+    let fitted_elevation_deg = kept.elevation_deg;
     let saucer = g
         .params()
         .iter()
         .position(|s| s.name == "has_saucer")
         .and_then(|i| result.model.params.get(i))
         .is_some_and(|&v| v > 0.5);
-    // The object's up axis in the fitted camera's frame (camera on +Z looking down −Z):
-    // tilted towards the camera by the elevation.
-    let up = fitted.params.rotation_and_derivatives()[0] * DVec3::Y;
-    let fitted_elevation_deg = up.z.clamp(-1.0, 1.0).asin().to_degrees();
     Ok(BenchScore {
         fitted_elevation_deg,
-        fitted_aspect: rim_aspect(&mesh.positions),
+        fitted_aspect: kept.aspect,
         true_aspect: rim_aspect(&case.truth.positions),
         mask_iou,
         iou64: iou,
@@ -347,5 +379,44 @@ pub fn fit_case(
         cli_photo_iou: cli_ious.first().copied().unwrap_or(0.0),
         warnings,
         saucer,
+        runs,
+    })
+}
+
+/// What [`score_fit`] measures of one fit.
+struct FitScore {
+    iou64: f64,
+    photo_iou: f64,
+    elevation_deg: f64,
+    aspect: f64,
+}
+
+/// The IoU-64 of `fit` against the case's truth, its photo-view IoU against the true
+/// silhouette, its camera's elevation and its [`rim_aspect`].
+fn score_fit(case: &BenchCase, fit: &FitResult) -> Result<FitScore, FitError> {
+    let mesh = fit
+        .model
+        .generator
+        .generate(&fit.model.params, Lod::High)
+        .map_err(|x| FitError(x.to_string()))?;
+    let fitted = fit
+        .views
+        .first()
+        .ok_or_else(|| FitError("a fit without a view".into()))?;
+    let moved = to_photo_frame(&mesh.positions, fitted, &case.view()?);
+    let iou64 = iou64(
+        (&moved, &mesh.triangles),
+        (&case.truth.positions, &case.truth.triangles),
+        128,
+    )?;
+    let photo_iou = eval::view_iou(&mesh, fitted, &binarised(&case.mask_full))?;
+    // The object's up axis in the fitted camera's frame (camera on +Z looking down −Z):
+    // tilted towards the camera by the elevation.
+    let up = fitted.params.rotation_and_derivatives()[0] * DVec3::Y;
+    Ok(FitScore {
+        iou64,
+        photo_iou,
+        elevation_deg: up.z.clamp(-1.0, 1.0).asin().to_degrees(),
+        aspect: rim_aspect(&mesh.positions),
     })
 }

@@ -188,8 +188,9 @@ fn a_case_loads_and_the_cli_pipeline_scores_it() {
     assert!(check > 0.97, "truth check {check}");
     assert!((binary_iou(&case.mask, &case.mask_full) - 1.0).abs() < 1e-12);
     // The CLI's pipeline at a quick quality: a plain background is segmented well, and a cup
-    // the generator can make is recovered.
-    let s = fit_case(&case, Some(cam.fov_y), 0.3).unwrap();
+    // the generator can make is recovered. Its runs are scored too (`--each`): one run at this
+    // quality (a quick preview), the kept one, scored as the fit.
+    let s = fit_case(&case, Some(cam.fov_y), 0.3, true).unwrap();
     std::fs::remove_dir_all(&root).ok();
     println!(
         "mask IoU {:.3}, IoU-64 {:.3}, photo-view IoU {:.3} / {:.3}, warnings {:?}",
@@ -198,4 +199,10 @@ fn a_case_loads_and_the_cli_pipeline_scores_it() {
     assert!(s.mask_iou > 0.95, "mask IoU {}", s.mask_iou);
     assert!(s.photo_iou > 0.9, "photo-view IoU {}", s.photo_iou);
     assert!(s.iou64 > 0.85, "IoU-64 {}", s.iou64);
+    assert_eq!(s.runs.len(), 1);
+    let run = &s.runs[0];
+    assert!(run.kept);
+    assert_eq!(run.iou64, s.iou64);
+    assert_eq!(run.photo_iou, s.photo_iou);
+    assert!(run.cut_iou > 0.9, "against the hard cut {}", run.cut_iou);
 }
