@@ -11,6 +11,10 @@
 //! `cargo bench --bench building_bench` runs everything; `-- --quick` at quality 0.4;
 //! `-- NAME …` only those cases (`paper` for the paper's building); `-- --inputs mask,plain`
 //! only those inputs; `-- --paper-obj PATH` reads the paper's building from elsewhere;
+//! The *3D agreement* column is what the CLI prints after a fit: how alike the runs that match
+//! the mask about as well are in 3D (`procfit::reconstruct::eval::agreement`); below
+//! `AGREEMENT_LEVEL` the CLI and the page warn that the mask does not fix the shape, and the
+//! last line says how the warned fits score against the others.
 //! `-- --save DIR` also writes each case's photos and masks there as PNG; `-- --each` prints
 //! every run of each fit (loss, tie prior, IoU-64, main shape parameters) after its row.
 
@@ -18,10 +22,16 @@ use procfit::building_bench::{
     BenchScore, Input, PAPER_CAMERAS, case_view, cases, fit_and_score, fit_and_score_input,
     input_mask, paper_building,
 };
+use procfit::reconstruct::eval::{AGREEMENT_LEVEL, agreement_warning};
 use std::path::PathBuf;
 
 /// One fitted row: IoU-64, photo-view IoU, seconds.
 type Row = (f64, f64, f64);
+
+/// The agreement column: the number, or "–" without one.
+fn agreement_cell(a: Option<f64>) -> String {
+    a.map_or("–".to_string(), |a| format!("{a:.3}"))
+}
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -60,9 +70,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "## Independent building benchmark, 2 threads, quality {quality}{}\n",
         if quick { " (--quick)" } else { "" }
     );
-    println!("| building | kind | input | IoU-64 | photo-view IoU | seconds | ΔE wall / roof |");
-    println!("|---|---|---|---|---|---|---|");
+    println!(
+        "| building | kind | input | IoU-64 | photo-view IoU | seconds | ΔE wall / roof | 3D agreement |"
+    );
+    println!("|---|---|---|---|---|---|---|---|");
     let mut sums: Vec<(Input, Vec<Row>)> = Vec::new();
+    // Every fit's IoU-64 and whether the CLI warns that the mask does not fix the shape.
+    let mut warned: Vec<(f64, bool)> = Vec::new();
     let mut run =
         |name: &str,
          kind: &str,
@@ -78,12 +92,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         .colour_de
                         .map_or(String::new(), |(w, r)| format!("{} / {}", de(w), de(r)));
                     println!(
-                        "| {name} | {kind} | {} | {:.3} | {:.3} | {secs:.1} | {colours} |",
+                        "| {name} | {kind} | {} | {:.3} | {:.3} | {secs:.1} | {colours} | {} |",
                         input.name(),
                         s.iou64,
-                        s.photo_iou
+                        s.photo_iou,
+                        agreement_cell(s.agreement)
                     );
                     print_runs(&s);
+                    warned.push((s.iou64, agreement_warning(s.agreement).is_some()));
                     let row = (s.iou64, s.photo_iou, secs);
                     match sums.iter_mut().find(|x| x.0 == input) {
                         Some(x) => x.1.push(row),
@@ -126,9 +142,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             Some(mesh) => {
                 println!("\n## The paper's test building (the paper reports IoU-64 0.886)\n");
                 println!(
-                    "| camera (yaw°, elevation°) | input | IoU-64 | photo-view IoU | seconds |"
+                    "| camera (yaw°, elevation°) | input | IoU-64 | photo-view IoU | seconds | 3D agreement |"
                 );
-                println!("|---|---|---|---|---|");
+                println!("|---|---|---|---|---|---|");
                 for (yaw, pitch) in PAPER_CAMERAS {
                     let view = case_view(&mesh, yaw.to_radians(), pitch.to_radians())?;
                     let t = std::time::Instant::now();
@@ -139,12 +155,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     match r {
                         Ok(s) => {
                             println!(
-                                "| {yaw:.0}, {pitch:.0} | mask | {:.3} | {:.3} | {:.1} |",
+                                "| {yaw:.0}, {pitch:.0} | mask | {:.3} | {:.3} | {:.1} | {} |",
                                 s.iou64,
                                 s.photo_iou,
-                                t.elapsed().as_secs_f64()
+                                t.elapsed().as_secs_f64(),
+                                agreement_cell(s.agreement)
                             );
                             print_runs(&s);
+                            warned.push((s.iou64, agreement_warning(s.agreement).is_some()));
                         }
                         Err(e) => println!("| {yaw:.0}, {pitch:.0} | mask | failed: {e} | 0 | |"),
                     }
@@ -152,6 +170,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         }
     }
+    // Does the warning go with the bad fits? The mean IoU-64 of the warned and of the others.
+    let mean = |w: bool| {
+        let v: Vec<f64> = warned.iter().filter(|x| x.1 == w).map(|x| x.0).collect();
+        let m = v.iter().sum::<f64>() / v.len().max(1) as f64;
+        format!("{} fits, mean IoU-64 {m:.3}", v.len())
+    };
+    println!(
+        "\n3D agreement below {AGREEMENT_LEVEL} (the CLI warns that the mask does not fix the \
+         shape): {}; the others: {}",
+        mean(true),
+        mean(false)
+    );
     Ok(())
 }
 
@@ -159,11 +189,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 fn print_runs(s: &BenchScore) {
     for (k, r) in s.runs.iter().enumerate() {
         eprintln!(
-            "    run {k}{}: loss {:.5}, tie prior {:.3}, IoU-64 {:.3}, {}",
+            "    run {k}{}: loss {:.5}, tie prior {:.3}, IoU-64 {:.3}, against the kept run {:.3}, {}",
             if r.kept { " (kept)" } else { "" },
             r.loss,
             r.tie_prior,
             r.iou64,
+            r.agreement,
             r.shape
         );
     }

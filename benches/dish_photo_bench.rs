@@ -147,7 +147,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     );
                     for (k, r) in s.runs.iter().enumerate() {
                         eprintln!(
-                            "    {} run {k}{}: loss {:.3e}, tie prior {:.3}, IoU-64 {:.3}, elevation {:.0}°, height/rim {:.2}, photo-view IoU {:.4}, against the hard cut {:.4}",
+                            "    {} run {k}{}: loss {:.3e}, tie prior {:.3}, IoU-64 {:.3}, elevation {:.0}°, height/rim {:.2}, photo-view IoU {:.4}, against the hard cut {:.4}, IoU-64 against the kept run {:.3}",
                             c.name,
                             if r.kept { " (kept)" } else { "" },
                             r.loss,
@@ -156,7 +156,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                             r.elevation_deg,
                             r.aspect,
                             r.photo_iou,
-                            r.cut_iou
+                            r.cut_iou,
+                            r.agreement
                         );
                     }
                     let row = [s.mask_iou, s.iou64, s.photo_iou, secs];

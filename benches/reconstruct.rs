@@ -114,6 +114,10 @@ fn main() {
                     .unwrap();
                     let r = session.run().unwrap();
                     if each {
+                        eprintln!(
+                            "    3D agreement of the runs: {:?}",
+                            session.agreement().unwrap()
+                        );
                         for (k, run) in session.run_results().into_iter().enumerate() {
                             let Some(run) = run else { continue };
                             eprintln!(

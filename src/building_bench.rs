@@ -770,6 +770,10 @@ pub struct RunScore {
     pub tie_prior: f64,
     /// The paper's IoU-64 against the truth, as [`BenchScore::iou64`].
     pub iou64: f64,
+    /// Its IoU-64 against the kept run's model, both in the kept run's frame
+    /// ([`eval::fit_agreement`](crate::reconstruct::eval::fit_agreement)): how different a
+    /// shape it is.
+    pub agreement: f64,
     /// Whether the fit kept this run.
     pub kept: bool,
     /// Its main shape parameters, `name=value` separated by spaces.
@@ -787,6 +791,8 @@ pub struct BenchScore {
     /// photo ([`crate::colors::estimate`]) against the colours the photo was drawn with
     /// (`None` where the fitted model has no such part in view).
     pub colour_de: Option<(Option<f64>, Option<f64>)>,
+    /// How well the mask fixes the shape, as the CLI prints it ([`Session::agreement`]).
+    pub agreement: Option<f64>,
     /// Every run of the fit, when asked for (`each`); empty otherwise.
     pub runs: Vec<RunScore>,
 }
@@ -840,6 +846,7 @@ fn fit_scored(
     };
     let mut session = Session::new(config, vec![mask])?;
     let result = session.run()?;
+    let agreement = session.agreement()?;
     let (iou, mesh) = fit_iou64(&result, truth, view)?;
     let fitted = result
         .views
@@ -869,6 +876,7 @@ fn fit_scored(
                 loss: run.loss,
                 tie_prior: run.model.generator.tie_prior(p),
                 iou64: fit_iou64(run, truth, view)?.0,
+                agreement: crate::reconstruct::eval::fit_agreement(&result, run, 128)?,
                 kept: run.loss == result.loss && *p == result.model.params,
                 shape,
             });
@@ -899,6 +907,7 @@ fn fit_scored(
         iou64: iou,
         photo_iou,
         colour_de,
+        agreement,
         runs,
     })
 }

@@ -247,6 +247,9 @@ pub struct RunScore {
     pub photo_iou: f64,
     /// Its photo-view IoU against the automatic mask's hard cut (no don't-care band).
     pub cut_iou: f64,
+    /// Its IoU-64 against the kept run's model, both in the kept run's frame
+    /// ([`eval::fit_agreement`]): how different a shape it is.
+    pub agreement: f64,
     /// Whether the fit kept it.
     pub kept: bool,
 }
@@ -351,6 +354,7 @@ pub fn fit_case(
             runs.push(RunScore {
                 photo_iou: s.photo_iou,
                 cut_iou,
+                agreement: eval::fit_agreement(&result, run, 128)?,
                 loss: run.loss,
                 tie_prior: g.tie_prior(&run.model.params),
                 iou64: s.iou64,

@@ -419,6 +419,7 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
         }
     });
     let result = session.result().map_err(|e| e.to_string())?;
+    let agreement = session.agreement().map_err(|e| e.to_string())?;
     let colors = if a.default_colors {
         procfit::model::PartColors::new()
     } else {
@@ -450,7 +451,23 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
         result.loss,
         model.lod.index()
     );
-    report_photo_match(&result, &masks, &a.images)
+    report_photo_match(&result, &masks, &a.images)?;
+    report_agreement(agreement);
+    Ok(())
+}
+
+/// Prints how well the photos fix the shape (the 3D agreement of the runs that matched them
+/// about as well as the kept one, [`eval::agreement`]) and, when they do not, a warning saying
+/// what to try.
+fn report_agreement(agreement: Option<f64>) {
+    if let Some(a) = agreement {
+        println!(
+            "3D agreement of the runs that match the photos as well: {a:.3} (1 = the same shape)"
+        );
+    }
+    if let Some(w) = eval::agreement_warning(agreement) {
+        eprintln!("procfit: warning: {w}");
+    }
 }
 
 /// `--windows`: the window labels of each view (background, façade, window, don't care) from

@@ -533,3 +533,55 @@ fn own_cup_on_a_saucer_gets_its_saucer() {
         assert!(iou >= 0.85, "pitch {pitch}: IoU-64 {iou:.4} < 0.85");
     }
 }
+
+/// `eval::agreement`: a run compared with the kept one through their cameras. The same shape
+/// placed twice as large and twice as far (the same in the photo, which links the two) agrees
+/// at 1; a much lower dish agrees less and is warned about; a run whose loss is outside the
+/// window, and the kept run itself, are not compared.
+#[test]
+fn agreement_compares_the_runs_that_match_as_well_through_their_cameras() {
+    use procfit::reconstruct::eval::{
+        AGREEMENT_LEVEL, AGREEMENT_WINDOW, agreement, agreement_warning,
+    };
+    let mut rng = Rng::new(5);
+    let g = generator("dish");
+    let params = g.preset("mug").unwrap().values;
+    let mesh = mesh_of("dish", &params, Lod::Low);
+    let view = random_view_at(&mut rng, &mesh, 0.5, 0.0);
+    // A one-run fit gives a real result to vary.
+    let kept = fit(
+        FitConfig {
+            quality: 0.2,
+            restarts: 1,
+            ..config(1, 0.2)
+        },
+        vec![render_mask(&mesh, &view, 64)],
+    );
+    assert_eq!(
+        agreement(&kept, [&kept]).unwrap(),
+        None,
+        "not against itself"
+    );
+    let mut same = kept.clone();
+    same.loss = kept.loss * (1.0 + 0.5 * AGREEMENT_WINDOW);
+    // Twice the size, twice as far: the same shape in the photo's frame.
+    same.views[0].params.scale *= 2.0;
+    same.views[0].params.translation *= 2.0;
+    let a = agreement(&kept, [&kept, &same]).unwrap().unwrap();
+    assert!(a > 0.99, "the same shape agrees: {a}");
+    assert_eq!(agreement_warning(Some(a)), None);
+    // A dish 0.4 times as tall, through the same camera: another shape.
+    let mut deeper = same.clone();
+    let h = g.params().iter().position(|p| p.name == "y_scale").unwrap();
+    deeper.model.params[h] *= 0.4;
+    let b = agreement(&kept, [&deeper]).unwrap().unwrap();
+    assert!(b < AGREEMENT_LEVEL, "another shape disagrees: {b}");
+    assert!(agreement_warning(Some(b)).is_some());
+    let mut worse = deeper.clone();
+    worse.loss = kept.loss * (1.0 + 2.0 * AGREEMENT_WINDOW) + 1e-9;
+    assert_eq!(
+        agreement(&kept, [&worse]).unwrap(),
+        None,
+        "outside the window"
+    );
+}

@@ -79,26 +79,29 @@ function colorNote(r) {
 /**
  * Says how well the fitted model matches each photo: its photo-view IoU (the model through
  * the photo's fitted camera against the photo's mask, don't-care excluded), and, below the
- * core's level, that it does not match and what to do (the core's sentence). Empty without
- * numbers.
- * @param {{ photo_ious?: number[], match_level?: number, match_warning?: string | null }} r
+ * core's level, that it does not match and what to do (the core's sentence); then, when other
+ * fits matched the photos as well but differ in 3D (the core's agreement below its level),
+ * that the photos do not fix the shape. Empty without numbers.
+ * @param {{ photo_ious?: number[], match_level?: number, match_warning?: string | null, agreement_warning?: string | null }} r
  */
 export function showMatch(r) {
   const ious = r.photo_ious ?? [];
+  fitMatch.dataset.agreement = r.agreement_warning ? 'ambiguous' : '';
   if (!ious.length) {
     say(fitMatch, '');
     fitMatch.dataset.match = '';
     return;
   }
+  const ambiguity = r.agreement_warning ? ` ${r.agreement_warning.charAt(0).toUpperCase()}${r.agreement_warning.slice(1)}.` : '';
   const each = ious.map((v, i) => `${ious.length > 1 ? `photo ${i + 1} ` : ''}${v.toFixed(2)}`).join(', ');
   const level = typeof r.match_level === 'number' ? r.match_level.toFixed(2) : '';
   const numbers = `How well the fitted model matches ${ious.length > 1 ? 'each photo' : 'the photo'} (outline overlap, 1 = exact): ${each}.`;
   if (r.match_warning) {
     const why = r.match_warning.charAt(0).toUpperCase() + r.match_warning.slice(1);
-    say(fitMatch, `${numbers} ${why}.`, 'warn');
+    say(fitMatch, `${numbers} ${why}.${ambiguity}`, 'warn');
     fitMatch.dataset.match = 'poor';
   } else {
-    say(fitMatch, `${numbers} That is a match (${level} or better).`, 'info');
+    say(fitMatch, `${numbers} That is a match (${level} or better).${ambiguity}`, ambiguity ? 'warn' : 'info');
     fitMatch.dataset.match = 'good';
   }
 }

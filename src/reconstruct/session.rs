@@ -257,6 +257,21 @@ impl Session {
             .collect()
     }
 
+    /// How well the photos fix the shape once every run is done ([`eval::agreement`] of the
+    /// kept run against the others; `None` before, with one run, or when no other run matched
+    /// the photos about as well).
+    ///
+    /// [`eval::agreement`]: super::eval::agreement
+    pub fn agreement(&self) -> Result<Option<f64>, FitError> {
+        if !self.is_done() {
+            return Ok(None);
+        }
+        let Some((kept, _)) = self.best_finished() else {
+            return Ok(None);
+        };
+        super::eval::agreement(kept, self.run_results().into_iter().flatten())
+    }
+
     /// The best finished run's result and last progress.
     fn best_finished(&self) -> Option<&(FitResult, Progress)> {
         self.finished.get(self.best?)?.as_ref()

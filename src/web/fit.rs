@@ -56,6 +56,11 @@ struct ResultOut {
     match_level: f64,
     /// What is wrong and what to try when a photo is below the level (`None` otherwise).
     match_warning: Option<String>,
+    /// How well the photos fix the shape (`eval::agreement`, what the CLI prints): `None`
+    /// before the end, with one run, or when no other run matched about as well.
+    agreement: Option<f64>,
+    /// What it means and what to try when it is below `eval::AGREEMENT_LEVEL`.
+    agreement_warning: Option<String>,
 }
 
 /// Masks from 8-bit codes (object 255, background 0, don't care 128, anything else a soft
@@ -285,7 +290,10 @@ impl FitSession {
             .flat_map(|v| export_camera(v, None).to_floats())
             .collect();
         let photo_ious = eval::result_photo_ious(&r, &self.masks).map_err(js)?;
+        let agreement = self.session.agreement().map_err(js)?;
         let out = ResultOut {
+            agreement,
+            agreement_warning: eval::agreement_warning(agreement),
             match_warning: eval::photo_match_warning(&photo_ious, &[]),
             match_level: eval::PHOTO_MATCH_LEVEL,
             photo_ious,
