@@ -5,7 +5,7 @@
 //! `-- WORD …` runs only the objects whose name contains one of the words (`-- building`);
 //! `-- --threads N` runs one thread count only; `-- --cameras N` fits N cameras (4);
 //! `-- --each` prints a line per camera (its yaw and elevation, the IoU-64 and the fitted
-//! parameters) and per run (loss, tie prior, fitted yaw, IoU-64); `-- --fill-holes` fills the
+//! parameters) and per run (loss, tie prior, fitted yaw, IoU-64, IoU-64 against the kept run); `-- --fill-holes` fills the
 //! masks' holes (a mug handle's) before fitting, to measure what the hole tells the fit.
 #![allow(
     clippy::unwrap_used,
@@ -121,11 +121,12 @@ fn main() {
                         for (k, run) in session.run_results().into_iter().enumerate() {
                             let Some(run) = run else { continue };
                             eprintln!(
-                                "    run {k}: loss {:.5}, tie prior {:.3}, fitted yaw {:.0}°, IoU-64 {:.3}",
+                                "    run {k}: loss {:.5}, tie prior {:.3}, fitted yaw {:.0}°, IoU-64 {:.3}, against the kept run {:.3}",
                                 run.loss,
                                 run.model.generator.tie_prior(&run.model.params),
                                 run.views[0].params.yaw.to_degrees(),
-                                fit_iou64(run, mesh, truth)
+                                fit_iou64(run, mesh, truth),
+                                procfit::reconstruct::eval::fit_agreement(&r, run, 128).unwrap()
                             );
                         }
                     }

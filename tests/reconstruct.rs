@@ -537,7 +537,8 @@ fn own_cup_on_a_saucer_gets_its_saucer() {
 /// `eval::agreement`: a run compared with the kept one through their cameras. The same shape
 /// placed twice as large and twice as far (the same in the photo, which links the two) agrees
 /// at 1; a much lower dish agrees less and is warned about; a run whose loss is outside the
-/// window, and the kept run itself, are not compared.
+/// window, one the tie-break finds less plausible (a pinched handle), and the kept run itself
+/// are not compared.
 #[test]
 fn agreement_compares_the_runs_that_match_as_well_through_their_cameras() {
     use procfit::reconstruct::eval::{
@@ -577,6 +578,20 @@ fn agreement_compares_the_runs_that_match_as_well_through_their_cameras() {
     let b = agreement(&kept, [&deeper]).unwrap().unwrap();
     assert!(b < AGREEMENT_LEVEL, "another shape disagrees: {b}");
     assert!(agreement_warning(Some(b)).is_some());
+    // The same other shape with its handle pinched (what a turned handle fitted side-on looks
+    // like): the tie-break finds it less plausible than the kept fit, so it is no alternative.
+    let mut pinched = deeper.clone();
+    use procfit::generators::dish::{HANDLE_STEPS, P_SWEEP};
+    for k in 0..HANDLE_STEPS {
+        let t = k as f64 / (HANDLE_STEPS - 1) as f64 - 0.5;
+        pinched.model.params[P_SWEEP + k] = 0.2 + 0.4 * t * t;
+    }
+    assert!(g.tie_prior(&pinched.model.params) > g.tie_prior(&kept.model.params));
+    assert_eq!(
+        agreement(&kept, [&pinched]).unwrap(),
+        None,
+        "less plausible"
+    );
     let mut worse = deeper.clone();
     worse.loss = kept.loss * (1.0 + 2.0 * AGREEMENT_WINDOW) + 1e-9;
     assert_eq!(
