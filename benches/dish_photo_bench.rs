@@ -84,9 +84,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         dirs.len()
     );
     println!(
-        "| case | above | lens | saucer / spoon | fov | mask IoU | IoU-64 | photo-view IoU (true / CLI) | saucer fitted | seconds | warnings | truth check | elevation fitted | height/rim fit / true |"
+        "| case | above | lens | saucer / spoon | fov | mask IoU | IoU-64 | photo-view IoU (true / CLI) | saucer fitted | seconds | warnings | truth check | elevation fitted | height/rim fit / true | 3D agreement |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     // Per fov row: mask IoU, IoU-64, photo-view IoU, seconds.
     let mut sums: Vec<(bool, Vec<[f64; 4]>)> = Vec::new();
     let mut notes = Vec::new();
@@ -132,7 +132,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         s.warnings.len().to_string()
                     };
                     println!(
-                        "| {} | {:.0}° | {:.0} mm | {setting} | {which} | {:.3} | {:.3} | {:.3} / {:.3} | {} | {secs:.1} | {warn} | {check:.3} | {:.0}° | {:.2} / {:.2} |",
+                        "| {} | {:.0}° | {:.0} mm | {setting} | {which} | {:.3} | {:.3} | {:.3} / {:.3} | {} | {secs:.1} | {warn} | {check:.3} | {:.0}° | {:.2} / {:.2} | {} |",
                         c.name,
                         c.elevation_deg,
                         c.focal_35mm,
@@ -144,6 +144,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         s.fitted_elevation_deg,
                         s.fitted_aspect,
                         s.true_aspect,
+                        s.agreement.map_or("–".to_string(), |a| format!("{a:.3}")),
                     );
                     for (k, r) in s.runs.iter().enumerate() {
                         eprintln!(

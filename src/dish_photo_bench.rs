@@ -215,7 +215,8 @@ pub struct BenchScore {
     pub photo_iou: f64,
     /// The fit through its fitted camera against the automatic mask (what the CLI prints).
     pub cli_photo_iou: f64,
-    /// What the CLI would tell: the mask's warnings, then the "does not match" one.
+    /// What the CLI would tell: the mask's warnings, then the "does not match" one, then the
+    /// "does not fix the shape" one.
     pub warnings: Vec<String>,
     /// The fitted dish's saucer switch (`has_saucer` > ½).
     pub saucer: bool,
@@ -226,6 +227,8 @@ pub struct BenchScore {
     pub fitted_aspect: f64,
     /// The same of the truth.
     pub true_aspect: f64,
+    /// How well the photo fixes the shape, as the CLI prints it (`Session::agreement`).
+    pub agreement: Option<f64>,
     /// Every run of the fit when asked for (`each`), in run order; empty otherwise.
     pub runs: Vec<RunScore>,
 }
@@ -342,6 +345,10 @@ pub fn fit_case(
             eprintln!("PROCFIT_DISH_DUMP: {}: {e}", path.display());
         }
     }
+    let agreement = session.agreement()?;
+    if let Some(w) = eval::agreement_warning(agreement) {
+        warnings.push(w);
+    }
     let kept = score_fit(case, &result)?;
     let mut runs = Vec::new();
     if each {
@@ -375,6 +382,7 @@ pub fn fit_case(
         .is_some_and(|&v| v > 0.5);
     Ok(BenchScore {
         fitted_elevation_deg,
+        agreement,
         fitted_aspect: kept.aspect,
         true_aspect: rim_aspect(&case.truth.positions),
         mask_iou,
