@@ -9,6 +9,7 @@
 //! and is read from there, never copied), its masks from three cameras are fitted too.
 //!
 //! `cargo bench --bench building_bench` runs everything; `-- --quick` at quality 0.4;
+//! `-- --seed N` fits with seed N (0 by default: judge a change over several seeds);
 //! `-- NAME …` only those cases (`paper` for the paper's building); `-- --inputs mask,plain`
 //! only those inputs; `-- --paper-obj PATH` reads the paper's building from elsewhere;
 //! The *3D agreement* column is what the CLI prints after a fit: how alike the runs that match
@@ -18,6 +19,7 @@
 //! `-- --save DIR` also writes each case's photos and masks there as PNG; `-- --each` prints
 //! every run of each fit (loss, tie prior, IoU-64, main shape parameters) after its row.
 
+use procfit::bench_cases::BenchFit;
 use procfit::building_bench::{
     BenchScore, Input, PAPER_CAMERAS, case_view, cases, fit_and_score, fit_and_score_input,
     input_mask, paper_building,
@@ -35,8 +37,7 @@ fn agreement_cell(a: Option<f64>) -> String {
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let quick = args.iter().any(|a| a == "--quick");
-    let each = args.iter().any(|a| a == "--each");
+    let fit = BenchFit::from_args(&args)?;
     let mut paper_obj = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../shared/data/paper/building_test_2_original.obj");
     if !paper_obj.exists() {
@@ -48,6 +49,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
+            "--seed" => {
+                it.next();
+            }
             "--save" => save = Some(PathBuf::from(it.next().ok_or("--save needs a folder")?)),
             "--paper-obj" => {
                 paper_obj = PathBuf::from(it.next().ok_or("--paper-obj needs a file")?)
@@ -64,11 +68,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     let wanted = |n: &str| names.is_empty() || names.iter().any(|x| x == n);
-    let quality = if quick { 0.4 } else { 1.0 };
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
     println!(
-        "## Independent building benchmark, 2 threads, quality {quality}{}\n",
-        if quick { " (--quick)" } else { "" }
+        "## Independent building benchmark, 2 threads, quality {}, seed {}\n",
+        fit.quality, fit.seed
     );
     println!(
         "| building | kind | input | IoU-64 | photo-view IoU | seconds | ΔE wall / roof | 3D agreement |"
@@ -118,7 +121,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         for &input in &inputs {
             run(case.name, case.kind, input, &|| {
-                fit_and_score_input(&case.mesh, &case.view, input, quality, each)
+                fit_and_score_input(&case.mesh, &case.view, input, fit)
             });
         }
     }
@@ -150,7 +153,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     let t = std::time::Instant::now();
                     let r = pool.install(|| {
                         let mask = input_mask(&mesh, &view, Input::Mask)?;
-                        fit_and_score(&mesh, &view, mask, quality, each)
+                        fit_and_score(&mesh, &view, mask, fit)
                     });
                     match r {
                         Ok(s) => {

@@ -9,6 +9,7 @@
 //! See [`procfit::dish_photo_bench`].
 //!
 //! `cargo bench --bench dish_photo_bench` runs everything; `-- --quick` at quality 0.4;
+//! `-- --seed N` fits with seed N (0 by default: judge a change over several seeds);
 //! `-- --fov known` or `-- --fov unknown` only that row; `-- --threads N`; `-- NAME …` only
 //! those cases; `-- --dir DIR` reads another folder; `-- --save DIR` writes each case's
 //! automatic mask there (`NAME-auto.png`, the hard cut) beside the true one (`NAME-true.png`);
@@ -24,15 +25,14 @@
 //! `loss` and the fit's final loss). `-- --each` prints every run of each fit on stderr (loss,
 //! tie prior, IoU-64, elevation, height over rim diameter; the kept one marked).
 
-use procfit::bench_cases::case_dirs;
+use procfit::bench_cases::{BenchFit, case_dirs};
 use procfit::dish_photo_bench::{BenchCase, auto_segmentation, fit_case, truth_check};
 use procfit::segment::{Photo, plausible};
 use std::path::{Path, PathBuf};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let quick = args.iter().any(|a| a == "--quick");
-    let each = args.iter().any(|a| a == "--each");
+    let fit = BenchFit::from_args(&args)?;
     let mut dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/dish-photo-bench");
     let mut names = Vec::new();
     let mut fovs = vec![true, false];
@@ -42,8 +42,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     while let Some(a) = it.next() {
         match a.as_str() {
             "--dir" => dir = PathBuf::from(it.next().ok_or("--dir needs a folder")?),
-            // Read again by the `--masks` branch.
-            "--check" => {
+            // Read again by the `--masks` branch, and by `BenchFit::from_args`.
+            "--check" | "--seed" => {
                 it.next();
             }
             "--save" => save = Some(PathBuf::from(it.next().ok_or("--save needs a folder")?)),
@@ -75,13 +75,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .map(PathBuf::from);
         return masks_only(&dirs, save.as_deref(), check.as_deref());
     }
-    let quality = if quick { 0.4 } else { 1.0 };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()?;
     println!(
-        "## Independent dish photo benchmark (Mitsuba 3), {} cases, {threads} threads, quality {quality}\n",
-        dirs.len()
+        "## Independent dish photo benchmark (Mitsuba 3), {} cases, {threads} threads, quality {}, seed {}\n",
+        dirs.len(),
+        fit.quality,
+        fit.seed
     );
     println!(
         "| case | above | lens | saucer / spoon | fov | mask IoU | IoU-64 | photo-view IoU (true / CLI) | saucer fitted | seconds | warnings | truth check | elevation fitted | height/rim fit / true | 3D agreement |"
@@ -111,7 +112,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         for &known in &fovs {
             let fov = known.then_some(c.fov_y);
             let t = std::time::Instant::now();
-            let r = pool.install(|| fit_case(&case, fov, quality, each));
+            let r = pool.install(|| fit_case(&case, fov, fit));
             let secs = t.elapsed().as_secs_f64();
             let which = if known { "known" } else { "unknown" };
             let setting = format!(

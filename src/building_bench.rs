@@ -20,6 +20,7 @@
 //! `cargo bench --bench building_bench` prints the table; `tests/building_bench.rs` runs two
 //! cases at a reduced budget.
 
+use crate::bench_cases::BenchFit;
 use crate::camera::{View, ViewParams};
 use crate::generators::building::idx;
 use crate::generators::{Generator, Lod, Mesh, Part};
@@ -793,21 +794,20 @@ pub struct BenchScore {
     pub colour_de: Option<(Option<f64>, Option<f64>)>,
     /// How well the mask fixes the shape, as the CLI prints it ([`Session::agreement`]).
     pub agreement: Option<f64>,
-    /// Every run of the fit, when asked for (`each`); empty otherwise.
+    /// Every run of the fit, when asked for ([`BenchFit::each`]); empty otherwise.
     pub runs: Vec<RunScore>,
 }
 
-/// Fits `mask` as the CLI does with the building generator (the field of view known), `quality`
-/// scaling every stage's budget, and scores it against `truth` seen through `view`.
-/// With `each`, every run of the fit is scored too ([`BenchScore::runs`]).
+/// Fits `mask` as the CLI does with the building generator (the field of view known) with the
+/// budget and seed of `fit`, and scores it against `truth` seen through `view`; with
+/// `fit.each`, every run of the fit too ([`BenchScore::runs`]).
 pub fn fit_and_score(
     truth: &Mesh,
     view: &View,
     mask: Mask,
-    quality: f64,
-    each: bool,
+    fit: BenchFit,
 ) -> Result<BenchScore, FitError> {
-    fit_scored(truth, view, mask, quality, None, each)
+    fit_scored(truth, view, mask, None, fit)
 }
 
 /// [`fit_and_score`] from `input` made of `truth` through `view` ([`input_mask`]), and for a
@@ -816,32 +816,31 @@ pub fn fit_and_score_input(
     truth: &Mesh,
     view: &View,
     input: Input,
-    quality: f64,
-    each: bool,
+    fit: BenchFit,
 ) -> Result<BenchScore, FitError> {
     if input == Input::Mask {
-        return fit_and_score(truth, view, true_mask(truth, view)?, quality, each);
+        return fit_and_score(truth, view, true_mask(truth, view)?, fit);
     }
     let px = photo(truth, view, input)?;
     let mask = segmented(view, &px)?;
-    fit_scored(truth, view, mask, quality, Some(&px), each)
+    fit_scored(truth, view, mask, Some(&px), fit)
 }
 
 fn fit_scored(
     truth: &Mesh,
     view: &View,
     mask: Mask,
-    quality: f64,
     photo: Option<&[u8]>,
-    each: bool,
+    fit: BenchFit,
 ) -> Result<BenchScore, FitError> {
     let for_colours = mask.clone();
     let generator = crate::generators::building::Building.name();
     let config = FitConfig {
         generator: generator.into(),
         fov_y: vec![Some(view.params.fov_y)],
-        quality,
-        restarts: FitConfig::restarts_for(generator, quality),
+        quality: fit.quality,
+        restarts: FitConfig::restarts_for(generator, fit.quality),
+        seed: fit.seed,
         ..FitConfig::default()
     };
     let mut session = Session::new(config, vec![mask])?;
@@ -853,7 +852,7 @@ fn fit_scored(
         .first()
         .ok_or_else(|| FitError("a fit without a view".into()))?;
     let mut runs = Vec::new();
-    if each {
+    if fit.each {
         for run in session.run_results().into_iter().flatten() {
             let p = &run.model.params;
             let shape = [

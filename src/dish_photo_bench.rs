@@ -23,6 +23,7 @@
 //! `cargo bench --bench dish_photo_bench` prints the table; `tests/dish_photo_bench.rs` checks
 //! the loading and the frame change on a case it writes itself (no renderer needed).
 
+use crate::bench_cases::BenchFit;
 use crate::camera::{CameraPose, View, ViewParams};
 use crate::generators::{Generator, Lod, Mesh};
 use crate::mask::Mask;
@@ -229,7 +230,7 @@ pub struct BenchScore {
     pub true_aspect: f64,
     /// How well the photo fixes the shape, as the CLI prints it (`Session::agreement`).
     pub agreement: Option<f64>,
-    /// Every run of the fit when asked for (`each`), in run order; empty otherwise.
+    /// Every run of the fit when asked for ([`BenchFit::each`]), in run order; empty otherwise.
     pub runs: Vec<RunScore>,
 }
 
@@ -298,14 +299,13 @@ pub fn auto_segmentation(case: &BenchCase) -> Result<segment::Segmentation, FitE
 }
 
 /// Fits the case's photo as the CLI does (segmented automatically, the dish generator at the
-/// default settings, `fov_y` as `--fov` would give it, `None` as a PNG without EXIF) with
-/// `quality`, and scores it; with `each`, every run of the fit too ([`BenchScore::runs`]). The
-/// caller times it.
+/// default settings, `fov_y` as `--fov` would give it, `None` as a PNG without EXIF) with the
+/// budget and seed of `fit`, and scores it; with `fit.each`, every run of the fit too
+/// ([`BenchScore::runs`]). The caller times it.
 pub fn fit_case(
     case: &BenchCase,
     fov_y: Option<f64>,
-    quality: f64,
-    each: bool,
+    fit: BenchFit,
 ) -> Result<BenchScore, FitError> {
     let seg = auto_segmentation(case)?;
     if (seg.mask.width(), seg.mask.height()) != (case.mask.width(), case.mask.height()) {
@@ -319,8 +319,9 @@ pub fn fit_case(
     let config = FitConfig {
         generator: generator.into(),
         fov_y: vec![fov_y],
-        quality,
-        restarts: FitConfig::restarts_for(generator, quality),
+        quality: fit.quality,
+        restarts: FitConfig::restarts_for(generator, fit.quality),
+        seed: fit.seed,
         ..FitConfig::default()
     };
     let masks = vec![seg.mask.clone()];
@@ -351,7 +352,7 @@ pub fn fit_case(
     }
     let kept = score_fit(case, &result)?;
     let mut runs = Vec::new();
-    if each {
+    if fit.each {
         for run in session.run_results().into_iter().flatten() {
             let s = score_fit(case, run)?;
             let cut_iou = eval::result_photo_ious(run, std::slice::from_ref(&seg.object))?

@@ -10,6 +10,7 @@
     reason = "a test binary: a failed step should stop it loudly"
 )]
 
+use procfit::bench_cases::BenchFit;
 use procfit::building_bench::{
     BenchScore, Input, PAPER_CAMERAS, case_view, cases, fit_and_score, fit_and_score_input,
     input_mask, paper_building,
@@ -23,6 +24,15 @@ use std::path::PathBuf;
 /// 3 s a fit on 2 threads in release.
 const QUALITY: f64 = 1.0;
 
+/// The fits here: [`QUALITY`], the default seed, every run scored or not.
+fn settings(each: bool) -> BenchFit {
+    BenchFit {
+        quality: QUALITY,
+        seed: 0,
+        each,
+    }
+}
+
 fn check(name: &str, input: Input, min: f64) -> BenchScore {
     let case = cases()
         .unwrap()
@@ -30,7 +40,7 @@ fn check(name: &str, input: Input, min: f64) -> BenchScore {
         .find(|c| c.name == name)
         .unwrap();
     // Every run scored too (the bench's `--each`): one of them is the fit.
-    let s = fit_and_score_input(&case.mesh, &case.view, input, QUALITY, true).unwrap();
+    let s = fit_and_score_input(&case.mesh, &case.view, input, settings(true)).unwrap();
     eprintln!("{name} ({}): {s:?}", input.name());
     let kept: Vec<_> = s.runs.iter().filter(|r| r.kept).collect();
     assert_eq!(kept.len(), 1, "{name}: one run is kept");
@@ -125,7 +135,7 @@ fn paper_building_from_three_cameras() {
     for (yaw, pitch) in PAPER_CAMERAS {
         let view = case_view(&mesh, yaw.to_radians(), pitch.to_radians()).unwrap();
         let mask = input_mask(&mesh, &view, Input::Mask).unwrap();
-        let s = fit_and_score(&mesh, &view, mask, QUALITY, false).unwrap();
+        let s = fit_and_score(&mesh, &view, mask, settings(false)).unwrap();
         eprintln!("paper building at ({yaw}°, {pitch}°): {s:?}");
         assert!(
             s.iou64 >= 0.70,

@@ -11,7 +11,7 @@
 )]
 
 use glam::{DVec3, Vec3};
-use procfit::bench_cases::case_dirs;
+use procfit::bench_cases::{BenchFit, case_dirs};
 use procfit::camera::{CameraPose, View, ViewParams};
 use procfit::dish_photo_bench::{
     BenchCamera, BenchCase, binary_iou, fit_case, photo_view, to_photo_frame, truth_check,
@@ -190,7 +190,16 @@ fn a_case_loads_and_the_cli_pipeline_scores_it() {
     // The CLI's pipeline at a quick quality: a plain background is segmented well, and a cup
     // the generator can make is recovered. Its runs are scored too (`--each`): one run at this
     // quality (a quick preview), the kept one, scored as the fit.
-    let s = fit_case(&case, Some(cam.fov_y), 0.3, true).unwrap();
+    let s = fit_case(
+        &case,
+        Some(cam.fov_y),
+        BenchFit {
+            quality: 0.3,
+            seed: 0,
+            each: true,
+        },
+    )
+    .unwrap();
     std::fs::remove_dir_all(&root).ok();
     println!(
         "mask IoU {:.3}, IoU-64 {:.3}, photo-view IoU {:.3} / {:.3}, warnings {:?}",
