@@ -747,7 +747,7 @@ pub fn photo(mesh: &Mesh, view: &View, input: Input) -> Result<Vec<u8>, FitError
 }
 
 /// The mask a user's photo gives: the photo through [`segment::segment_auto`], as the CLI does
-/// (the mask with its don't-care band along the outline).
+/// (the automatic cut, [`segment::Segmentation::mask`]).
 pub fn segmented(view: &View, rgba: &[u8]) -> Result<Mask, FitError> {
     let e = |x: segment::SegmentError| FitError(x.0);
     let p = Photo::from_rgba(view.width, view.height, rgba, segment::WORKING_SIDE).map_err(e)?;

@@ -249,7 +249,7 @@ pub struct RunScore {
     pub aspect: f64,
     /// Its photo-view IoU against the true silhouette, as [`BenchScore::photo_iou`].
     pub photo_iou: f64,
-    /// Its photo-view IoU against the automatic mask's hard cut (no don't-care band).
+    /// Its photo-view IoU against the automatic mask (the CLI's own photo-view IoU).
     pub cut_iou: f64,
     /// Its IoU-64 against the kept run's model, both in the kept run's frame
     /// ([`eval::fit_agreement`]): how different a shape it is.

@@ -3,7 +3,8 @@
 //!
 //! The mask is the very one `reconstruct` makes from the photo ([`recon_cli::read_view`]), at
 //! the same working size (512 px on the longest side, or the photo's own size when smaller):
-//! white object, black background, grey 128 don't care (the band along the outline), which
+//! white object, black background, grey 128 don't care (where a semi-transparent alpha leaves a
+//! pixel unsure, or where the user paints it), which
 //! `reconstruct` reads back as it was written. A generator's mask extras come with it: a
 //! building's window mask (white = window, at the same size; `reconstruct --windows`), a
 //! tree's label image (0 background, 1 branch, 2 leaf, 255 don't care, at the photo's own size,

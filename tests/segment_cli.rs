@@ -99,11 +99,16 @@ fn the_written_mask_given_back_fits_as_the_photo_does() {
     let mask = scratch("mug-mask.png");
     let (said, _) = run_ok(&["segment", s(&photo), "-o", s(&mask)]);
     assert!(said.contains("confidence"), "{said}");
-    // The mask is at the working size (the photo's own, under 512 px), with a don't-care band.
+    // The mask is at the working size (the photo's own, under 512 px): the cut as the fit takes
+    // it, object and background, with no don't-care band along the outline.
     let img = image::open(&mask).unwrap().to_luma8();
     assert_eq!(img.dimensions(), (200, 150));
     let count = |v: u8| img.pixels().filter(|p| p[0] == v).count();
-    assert!(count(128) > 50, "a don't-care band along the outline");
+    assert_eq!(
+        count(0) + count(255),
+        200 * 150,
+        "only object and background"
+    );
     assert!(
         count(255) > 2000 && count(0) > 10_000,
         "object and background"

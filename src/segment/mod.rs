@@ -14,9 +14,10 @@
 //! Buildings get a second label, windows: [`windows::detect_windows`] finds darker rectangles
 //! inside the façade, [`windows::windows_from_strokes`] follows the user's strokes.
 //!
-//! Every way ends in the same [`Segmentation`]: a 0/1 object mask, the same with a
-//! [`Mask::DONT_CARE`] band along the outline (a couple of working pixels, where any
-//! segmentation is unsure), the bounding box and a confidence with human-readable warnings.
+//! Every way ends in the same [`Segmentation`]: a 0/1 object mask, the mask the fit takes
+//! (the same, with [`Mask::DONT_CARE`] only where the source itself is unsure: a
+//! semi-transparent alpha, a mask image's grey; no band along the outline: measured, it cost
+//! the fit accuracy), the bounding box and a confidence with human-readable warnings.
 //! Nothing here reads a clock: `std::time::Instant` panics on wasm32.
 //!
 //! What automatic mode can and cannot do (it models colour, not shape or meaning):
@@ -113,7 +114,9 @@ pub struct Stroke {
 pub struct Segmentation {
     /// 0/1 object mask, no don't-care pixels.
     pub object: Mask,
-    /// The same with [`Mask::DONT_CARE`] in a band along the outline: what the fit should use.
+    /// What the fit should use: [`Segmentation::object`], with [`Mask::DONT_CARE`] where the
+    /// source is unsure (a semi-transparent alpha, a mask image's grey 128). An automatic cut
+    /// has no don't-care pixels: a band of them along the outline cost the fit accuracy.
     pub mask: Mask,
     /// Bounding box of the object, `None` if nothing was found.
     pub bbox: Option<BBox>,

@@ -1,7 +1,7 @@
 //! The second label for buildings: windows inside the façade.
 //!
 //! Two ways, both returning a [`LabelImage`] with [`LABEL_BACKGROUND`], [`LABEL_FACADE`] and
-//! [`LABEL_WINDOW`] (and [`LabelImage::DONT_CARE`] in the object's outline band):
+//! [`LABEL_WINDOW`] (and [`LabelImage::DONT_CARE`] where the mask is don't care):
 //!
 //! - [`detect_windows`]: windows as *darker, rectangular* regions inside the object. Works for
 //!   the common daylight façade: glass darker than a lighter wall, windows axis-aligned in the
@@ -146,7 +146,8 @@ pub fn erase_windows(labels: &LabelImage, strokes: &[Stroke]) -> Result<LabelIma
 
 /// Window labels made for an earlier mask, fitted to the segmentation's current one: window
 /// pixels stay windows where they are still inside the object and are dropped outside it;
-/// every other object pixel is façade, the outline band don't care, the rest background —
+/// every other object pixel is façade, the mask's don't-care pixels don't care, the rest
+/// background —
 /// as [`detect_windows`] labels. Errors on labels of another size or an empty object.
 pub fn clip_windows(seg: &Segmentation, previous: &LabelImage) -> Result<LabelImage, SegmentError> {
     let (w, h) = (seg.object.width(), seg.object.height());
