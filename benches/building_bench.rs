@@ -9,7 +9,8 @@
 //! and is read from there, never copied), its masks from three cameras are fitted too.
 //!
 //! `cargo bench --bench building_bench` runs everything; `-- --quick` at quality 0.4;
-//! `-- --seed N` fits with seed N (0 by default: judge a change over several seeds);
+//! `-- --seed N` fits with seed N (0 by default: judge a change over several seeds); `-- --runs N`
+//! makes N runs a fit (the page's number by default);
 //! `-- NAME …` only those cases (`paper` for the paper's building); `-- --inputs mask,plain`
 //! only those inputs; `-- --paper-obj PATH` reads the paper's building from elsewhere;
 //! The *3D agreement* column is what the CLI prints after a fit: how alike the runs that match
@@ -24,6 +25,7 @@ use procfit::building_bench::{
     BenchScore, Input, PAPER_CAMERAS, case_view, cases, fit_and_score, fit_and_score_input,
     input_mask, paper_building,
 };
+use procfit::generators::Generator;
 use procfit::reconstruct::eval::{AGREEMENT_LEVEL, agreement_warning};
 use std::path::PathBuf;
 
@@ -49,7 +51,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
-            "--seed" => {
+            // Read by `BenchFit::from_args`.
+            "--seed" | "--runs" => {
                 it.next();
             }
             "--save" => save = Some(PathBuf::from(it.next().ok_or("--save needs a folder")?)),
@@ -70,8 +73,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let wanted = |n: &str| names.is_empty() || names.iter().any(|x| x == n);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
     println!(
-        "## Independent building benchmark, 2 threads, quality {}, seed {}\n",
-        fit.quality, fit.seed
+        "## Independent building benchmark, 2 threads, quality {}, seed {}, {} runs a fit\n",
+        fit.quality,
+        fit.seed,
+        fit.runs_for(procfit::generators::building::Building.name())
     );
     println!(
         "| building | kind | input | IoU-64 | photo-view IoU | seconds | ΔE wall / roof | 3D agreement |"

@@ -9,7 +9,8 @@
 //! See [`procfit::dish_photo_bench`].
 //!
 //! `cargo bench --bench dish_photo_bench` runs everything; `-- --quick` at quality 0.4;
-//! `-- --seed N` fits with seed N (0 by default: judge a change over several seeds);
+//! `-- --seed N` fits with seed N (0 by default: judge a change over several seeds); `-- --runs N`
+//! makes N runs a fit (the page's number by default);
 //! `-- --fov known` or `-- --fov unknown` only that row; `-- --threads N`; `-- NAME …` only
 //! those cases; `-- --dir DIR` reads another folder; `-- --save DIR` writes each case's
 //! automatic mask there (`NAME-auto.png`, the hard cut) beside the true one (`NAME-true.png`);
@@ -27,6 +28,7 @@
 
 use procfit::bench_cases::{BenchFit, case_dirs};
 use procfit::dish_photo_bench::{BenchCase, auto_segmentation, fit_case, truth_check};
+use procfit::generators::Generator;
 use procfit::segment::{Photo, plausible};
 use std::path::{Path, PathBuf};
 
@@ -43,7 +45,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         match a.as_str() {
             "--dir" => dir = PathBuf::from(it.next().ok_or("--dir needs a folder")?),
             // Read again by the `--masks` branch, and by `BenchFit::from_args`.
-            "--check" | "--seed" => {
+            "--check" | "--seed" | "--runs" => {
                 it.next();
             }
             "--save" => save = Some(PathBuf::from(it.next().ok_or("--save needs a folder")?)),
@@ -79,10 +81,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .num_threads(threads)
         .build()?;
     println!(
-        "## Independent dish photo benchmark (Mitsuba 3), {} cases, {threads} threads, quality {}, seed {}\n",
+        "## Independent dish photo benchmark (Mitsuba 3), {} cases, {threads} threads, quality {}, seed {}, {} runs a fit\n",
         dirs.len(),
         fit.quality,
-        fit.seed
+        fit.seed,
+        fit.runs_for(procfit::generators::dish::Dish.name())
     );
     println!(
         "| case | above | lens | saucer / spoon | fov | mask IoU | IoU-64 | photo-view IoU (true / CLI) | saucer fitted | seconds | warnings | truth check | elevation fitted | height/rim fit / true | 3D agreement |"

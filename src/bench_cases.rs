@@ -35,26 +35,42 @@ pub struct BenchFit {
     pub seed: u64,
     /// Whether every run of each fit is scored, not only the kept one.
     pub each: bool,
+    /// The fit's runs ([`FitConfig::restarts`](crate::reconstruct::FitConfig)), `None` for
+    /// what the page and the CLI make
+    /// ([`FitConfig::restarts_for`](crate::reconstruct::FitConfig::restarts_for)).
+    pub runs: Option<usize>,
 }
 
 impl BenchFit {
     /// The settings a benchmark's arguments ask for: `--quick` (quality 0.4, else 1),
-    /// `--seed N` (else the fit's default seed, 0) and `--each`.
+    /// `--seed N` (else the fit's default seed, 0), `--runs N` (else the page's) and `--each`.
     pub fn from_args(args: &[String]) -> Result<BenchFit, String> {
         let has = |flag: &str| args.iter().any(|a| a == flag);
-        let seed = match args.iter().position(|a| a == "--seed") {
-            None => 0,
-            Some(k) => {
-                let v = args.get(k + 1).ok_or("--seed needs a number")?;
-                v.parse()
-                    .map_err(|_| format!("--seed takes a whole number ≥ 0, not '{v}'"))?
-            }
+        let number = |flag: &str| -> Result<Option<u64>, String> {
+            let Some(k) = args.iter().position(|a| a == flag) else {
+                return Ok(None);
+            };
+            let v = args.get(k + 1).ok_or(format!("{flag} needs a number"))?;
+            v.parse()
+                .map(Some)
+                .map_err(|_| format!("{flag} takes a whole number ≥ 0, not '{v}'"))
+        };
+        let runs = match number("--runs")? {
+            Some(0) => return Err("--runs takes a whole number ≥ 1, not '0'".into()),
+            r => r.map(|r| usize::try_from(r).unwrap_or(usize::MAX)),
         };
         Ok(BenchFit {
             quality: if has("--quick") { 0.4 } else { 1.0 },
-            seed,
+            seed: number("--seed")?.unwrap_or(0),
             each: has("--each"),
+            runs,
         })
+    }
+
+    /// The runs of a fit of `generator` with these settings.
+    pub fn runs_for(&self, generator: &str) -> usize {
+        self.runs
+            .unwrap_or_else(|| crate::reconstruct::FitConfig::restarts_for(generator, self.quality))
     }
 }
 
@@ -74,18 +90,24 @@ mod tests {
             BenchFit {
                 quality: 1.0,
                 seed: 0,
-                each: false
+                each: false,
+                runs: None
             }
         );
-        let f = BenchFit::from_args(&args(&["--quick", "--seed", "7", "--each", "tower"])).unwrap();
+        let f = BenchFit::from_args(&args(&[
+            "--quick", "--seed", "7", "--each", "--runs", "12", "tower",
+        ]))
+        .unwrap();
         assert_eq!(
             f,
             BenchFit {
                 quality: 0.4,
                 seed: 7,
-                each: true
+                each: true,
+                runs: Some(12)
             }
         );
+        assert!(BenchFit::from_args(&args(&["--runs", "0"])).is_err());
         assert!(BenchFit::from_args(&args(&["--seed"])).is_err());
         let e = BenchFit::from_args(&args(&["--seed", "-1"])).unwrap_err();
         assert!(e.contains("'-1'"), "{e}");

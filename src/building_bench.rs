@@ -839,7 +839,7 @@ fn fit_scored(
         generator: generator.into(),
         fov_y: vec![Some(view.params.fov_y)],
         quality: fit.quality,
-        restarts: FitConfig::restarts_for(generator, fit.quality),
+        restarts: fit.runs_for(generator),
         seed: fit.seed,
         ..FitConfig::default()
     };

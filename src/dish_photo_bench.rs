@@ -320,7 +320,7 @@ pub fn fit_case(
         generator: generator.into(),
         fov_y: vec![fov_y],
         quality: fit.quality,
-        restarts: FitConfig::restarts_for(generator, fit.quality),
+        restarts: fit.runs_for(generator),
         seed: fit.seed,
         ..FitConfig::default()
     };

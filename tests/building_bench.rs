@@ -30,6 +30,7 @@ fn settings(each: bool) -> BenchFit {
         quality: QUALITY,
         seed: 0,
         each,
+        runs: None,
     }
 }
 

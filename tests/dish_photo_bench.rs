@@ -197,6 +197,7 @@ fn a_case_loads_and_the_cli_pipeline_scores_it() {
             quality: 0.3,
             seed: 0,
             each: true,
+            runs: None,
         },
     )
     .unwrap();
