@@ -3,14 +3,16 @@
 //! `target/tree-bench/` (run that first; without it this prints how). Per tree: the paper's
 //! similarity, IoU-64 (128², the fit at MEDIUM moved into the truth's frame through the photo's
 //! two cameras, [`procfit::tree::bench::to_truth_frame`]), the photo-view IoU (the fit through
-//! its own photo camera against the photo's object mask) and wall time on 2 threads; and the
+//! its own photo camera against the photo's object mask; both of the tree as the CLI writes it,
+//! its leaves carved by the photo, [`procfit::tree::carve`]) and wall time on 2 threads; and the
 //! baselines: a sphere, an ellipsoid on the truth's crown box, the same species another seed.
 //!
 //! `cargo bench --bench tree_bench` fits the colour photo (labelled as the CLI does);
 //! `-- --labels` fits the true label image too; `-- --quick` cuts the GA budget (`PHOTO_GA_BUDGET`) by 4,
 //! `-- --budget N` sets it, `-- --seed N` the fit's seed (1 by default), `-- --frame
 //! off|area|top|both` the candidates' framing ([`CandidateFraming`]; `--no-area` is `off`);
-//! `-- NAME …` runs only those cases; `-- --dir DIR` reads another folder; `-- --analyse`
+//! `-- --carve N` cuts leaf cards into N×N tiles to carve (`CARVE_GRID` by default),
+//! `-- --no-carve` measures the tree as generated; `-- NAME …` runs only those cases; `-- --dir DIR` reads another folder; `-- --analyse`
 //! adds a table of where the photo-view IoU is lost ([`analyse_silhouette`]: as is, leaf gaps
 //! closed, convex hulls, fills, area ratio) for each fit, the truth and the other seed.
 
@@ -39,6 +41,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut framing = None;
     let mut budget_arg: Option<usize> = None;
     let mut seed = 1;
+    // `--carve N`: N×N tiles a leaf card; `--no-carve`: the tree as generated.
+    let mut carve = Some(procfit::tree::carve::CARVE_GRID);
     let mut analyses: Vec<(String, &str, SilhouetteAnalysis)> = Vec::new();
     let mut dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/tree-bench");
     let mut names = Vec::new();
@@ -59,6 +63,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 })
             }
             "--seed" => seed = it.next().ok_or("--seed needs a number")?.parse::<u64>()?,
+            "--carve" => {
+                carve = Some(
+                    it.next()
+                        .ok_or("--carve needs a number")?
+                        .parse::<usize>()?,
+                )
+            }
+            "--no-carve" => carve = None,
             "--budget" => {
                 budget_arg = Some(
                     it.next()
@@ -83,8 +95,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let budget = budget_arg.or(quick.then_some(procfit::tree::impostor::PHOTO_GA_BUDGET / 4));
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
     println!(
-        "## Independent tree benchmark (ez-tree), {} cases, 2 threads{}\n",
+        "## Independent tree benchmark (ez-tree), {} cases, 2 threads, seed {seed}, {}{}\n",
         dirs.len(),
+        match carve {
+            Some(g) => format!("leaves carved {g}×{g}"),
+            None => "leaves not carved".into(),
+        },
         match budget {
             Some(b) => format!(", GA budget {b}"),
             None => String::new(),
@@ -130,7 +146,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         options.framing = CandidateFraming::Off;
                     }
                     let t = std::time::Instant::now();
-                    pool.install(|| fit_case_mesh(&case, labels, seed, budget, &options))
+                    pool.install(|| fit_case_mesh(&case, labels, seed, budget, &options, carve))
                         .map(|(r, mesh, view)| {
                             let seconds = t.elapsed().as_secs_f64();
                             if analyse {

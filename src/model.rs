@@ -15,9 +15,11 @@
 //! generator).
 
 use crate::generators::{self, Generator, Lod, Mesh, sanitize_params};
+use crate::tree::carve::LeafCarve;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::fmt;
+use std::sync::Arc;
 
 /// Per-part base colours by part name: linear RGB, each channel in 0–1 (glTF's
 /// `baseColorFactor` without alpha). A part not named keeps its generator default.
@@ -68,6 +70,10 @@ pub struct Model {
     pub seed: Option<u64>,
     /// Per-part base colours (from the photos); empty: the generator's defaults.
     pub colors: PartColors,
+    /// A tree's photo, which carves its leaves where it sees through the crown
+    /// ([`crate::tree::carve`]); `None` for any other model, or a tree as generated. Not in the
+    /// params document: the parameters regenerate the uncarved tree.
+    pub carve: Option<Arc<LeafCarve>>,
 }
 
 impl fmt::Debug for Model {
@@ -78,6 +84,7 @@ impl fmt::Debug for Model {
             .field("lod", &self.lod)
             .field("seed", &self.seed)
             .field("colors", &self.colors)
+            .field("carve", &self.carve.as_ref().map(|c| c.grid()))
             .finish()
     }
 }
@@ -94,6 +101,7 @@ impl Model {
             lod,
             seed: None,
             colors: PartColors::new(),
+            carve: None,
         })
     }
 
@@ -161,6 +169,7 @@ impl Model {
             lod,
             seed: doc.seed,
             colors,
+            carve: None,
         })
     }
 
@@ -175,6 +184,14 @@ impl Model {
     /// [`Model::colors`]: the mesh every export writes.
     pub fn mesh(&self) -> Result<Mesh, generators::GenError> {
         let mut mesh = self.generator.generate(&self.params, self.lod)?;
+        if let Some(c) = &self.carve
+            && self.generator.capabilities().fit == Some(generators::FitMethod::TreeGa)
+        {
+            mesh = c
+                .apply(&mesh)
+                .map_err(|e| generators::GenError::InvalidMesh(e.0))?
+                .0;
+        }
         self.paint(&mut mesh);
         Ok(mesh)
     }

@@ -11,8 +11,10 @@ use procfit::model::Model;
 use procfit::reconstruct::views::ViewVars;
 use procfit::reconstruct::{self, FitConfig, Session, eval};
 use procfit::segment::{self, Photo};
+use procfit::tree::carve::{CARVE_GRID, LeafCarve};
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 /// `procfit reconstruct`.
@@ -70,6 +72,11 @@ pub struct ReconstructArgs {
     /// rest within 0–1), e.g. '{"leafHue":[330,170],"leafMinValue":0.45}' for autumn leaves.
     #[arg(long)]
     tree_colors: Option<String>,
+    /// Trees: keep every leaf cluster the generator makes. By default the written tree's leaf
+    /// cards are cut into tiles and a tile is dropped where the photo sees through the crown
+    /// (nothing lies on such a pixel's ray); the params JSON regenerates the uncarved tree.
+    #[arg(long)]
+    no_carve: bool,
     /// Refit from a model: a params JSON or a GLB written by procfit (the page's "Refit from
     /// here"). Its generator is the one fitted (`--generator` may be left out or must agree);
     /// a tree keeps its seed and never ends less like the photo than the start.
@@ -780,6 +787,20 @@ fn reconstruct_tree(
         model = model.with_colors(&colors).map_err(|e| e.to_string())?;
     }
     let photo_view = framing.photo_view().map_err(|e| e.to_string())?;
+    let carved = if a.no_carve {
+        None
+    } else {
+        let carve = LeafCarve::new(labels.clone(), photo_view, CARVE_GRID)
+            .map_err(|e| e.to_string())?;
+        let whole = model.mesh().map_err(|e| e.to_string())?;
+        let (mesh, carving) = carve.apply(&whole).map_err(|e| e.to_string())?;
+        let iou = |m: &Mesh| {
+            procfit::tree::bench::photo_view_iou(m, &photo_view, &labels).map_err(|e| e.to_string())
+        };
+        let ious = (iou(&whole)?, iou(&mesh)?);
+        model.carve = Some(Arc::new(carve));
+        Some((carving, ious))
+    };
     let name = image.file_name().map(|n| n.to_string_lossy().into_owned());
     let cameras = [reconstruct::export_camera(&photo_view, name)];
     let summary = write_outputs(a, target, &model, &cameras)?;
@@ -803,6 +824,14 @@ fn reconstruct_tree(
         fit.similarity,
         model.lod.index()
     );
+    if let Some((c, (whole, carved))) = carved {
+        println!(
+            "leaves carved by the photo: {} of {} tiles ({} leaf cards cut into up to \
+             {CARVE_GRID}×{CARVE_GRID}) dropped where it sees through the crown; photo-view IoU \
+             at the photo's size {whole:.3} → {carved:.3} (--no-carve keeps them all)",
+            c.tiles_removed, c.tiles, c.cards
+        );
+    }
     if let Some(w) = eval::tree_match_warning(
         iou,
         "--tree-colors, or give a label image of 0 background, 1 branch, 2 leaf",

@@ -50,20 +50,25 @@ fn photo_to_glb_with_its_camera() {
     .save(&photo)
     .expect("png");
     let (glb, params) = (scratch("tree.glb"), scratch("tree.json"));
-    let (_, err) = run_ok(&[
-        "reconstruct",
-        "--generator",
-        "tree",
-        "--budget",
-        "400",
-        "--seed",
-        "2",
-        s(&photo),
-        "-o",
-        s(&glb),
-        "--params-out",
-        s(&params),
-    ]);
+    let fit = |glb: &PathBuf, extra: &[&str]| {
+        let mut args = vec![
+            "reconstruct",
+            "--generator",
+            "tree",
+            "--budget",
+            "400",
+            "--seed",
+            "2",
+            s(&photo),
+            "-o",
+            s(glb),
+            "--params-out",
+            s(&params),
+        ];
+        args.extend_from_slice(extra);
+        run_ok(&args)
+    };
+    let (out, err) = fit(&glb, &[]);
     assert!(
         err.contains("tree stage 3/3") && err.contains("ETA") && err.contains("similarity"),
         "progress: {err}"
@@ -101,6 +106,37 @@ fn photo_to_glb_with_its_camera() {
     let iou = procfit::reconstruct::eval::view_iou(&mesh, &view, &mask).expect("iou");
     println!("input-view IoU {iou:.3}");
     assert!(iou > 0.5, "input-view IoU {iou}");
+
+    // The leaves were carved by the photo: said, with the photo-view IoU before and after, and
+    // the carving made it no worse. `--no-carve` writes every leaf card.
+    let line = out
+        .lines()
+        .find(|l| l.starts_with("leaves carved by the photo: "))
+        .unwrap_or_else(|| panic!("no carving said: {out}"));
+    let ious: Vec<f64> = line
+        .split("photo's size ")
+        .nth(1)
+        .expect("the IoUs")
+        .split([' ', '→'])
+        .filter_map(|w| w.parse().ok())
+        .take(2)
+        .collect();
+    assert!(ious.len() == 2 && ious[1] >= ious[0], "{line}");
+    let whole = scratch("tree-whole.glb");
+    let (out, _) = fit(&whole, &["--no-carve"]);
+    assert!(!out.contains("leaves carved"), "{out}");
+    let triangles = |p: &PathBuf| {
+        procfit::glb::import_glb(&std::fs::read(p).expect("glb"))
+            .expect("imports")
+            .reference
+            .triangles
+            .len()
+    };
+    assert_ne!(
+        triangles(&whole),
+        triangles(&glb),
+        "carving changed nothing: {line}"
+    );
 
     // Refit from the params written: the tree keeps its seed and never gets less similar.
     let refit = scratch("tree-refit.json");

@@ -48,6 +48,10 @@ export class Editor extends EventTarget {
     this.colors = null;
     /** Whether the model shows `colors` (the "Colours from the photo" toggle) or the defaults. */
     this.useColors = true;
+    /** A tree fit's carving of the leaves by its photo (the worker's id), or null. */
+    this.carveId = null;
+    /** Whether the leaves are carved (the "Leaves carved by the photo" toggle). */
+    this.useCarve = true;
   }
 
   /**
@@ -56,8 +60,15 @@ export class Editor extends EventTarget {
    */
   get state() {
     return this.spec
-      ? { generator: this.spec.name, params: this.params.slice(), lod: this.lod, cameras: this.cameras.slice(), colors: this.colors, useColors: this.useColors }
+      ? { generator: this.spec.name, params: this.params.slice(), lod: this.lod, cameras: this.cameras.slice(), colors: this.colors, useColors: this.useColors, carveId: this.useCarve ? this.carveId : null }
       : null;
+  }
+
+  /** Carves a fitted tree's leaves by its photo (true) or shows them all (false). */
+  setUseCarve(on) {
+    this.useCarve = on;
+    this.schedule();
+    this.emitChange();
   }
 
   /** Shows the photos' part colours (true) or the generator's defaults (false). */
@@ -71,7 +82,7 @@ export class Editor extends EventTarget {
    * Shows `generator` with `params` (default: its defaults) as the new base ("reset" returns
    * here); clears the history. Throws for an unknown generator.
    */
-  open(generator, params = null, lod = this.lod, cameras = [], colors = null) {
+  open(generator, params = null, lod = this.lod, cameras = [], colors = null, carveId = null) {
     const spec = this.specs.get(generator);
     if (!spec) throw new Error(`this build has no generator called “${generator}”`);
     const changedGenerator = this.spec?.name !== generator;
@@ -84,6 +95,9 @@ export class Editor extends EventTarget {
     // Part colours belong to the model they were measured on: a new model keeps none.
     this.colors = colors && Object.keys(colors).length ? colors : null;
     this.useColors = true;
+    // So does a tree fit's carving: it belongs to that fit's tree (edits keep it).
+    this.carveId = carveId;
+    this.useCarve = true;
     this.undoStack = [];
     this.redoStack = [];
     if (changedGenerator) this.buildSliders();
@@ -237,10 +251,10 @@ export class Editor extends EventTarget {
     this.dirtySince = null;
     const reframe = this.reframe;
     this.reframe = false;
-    const request = { generator: this.spec.name, params: this.params.slice(), lod: this.lod, cameras: this.cameras.slice(), colors: this.colors, useColors: this.useColors };
+    const request = this.state;
     try {
       const t0 = performance.now();
-      const { glb, ms } = await this.client.call(REQUESTS.GENERATE_GLB, request);
+      const { glb, ms, carved } = await this.client.call(REQUESTS.GENERATE_GLB, request);
       const t1 = performance.now();
       // Keep a copy: GLTFLoader may hold on to the buffer, and the download must be these bytes.
       this.glb = { bytes: new Uint8Array(glb.slice(0)), ...request };
@@ -257,7 +271,7 @@ export class Editor extends EventTarget {
         if (this.timings.length > 100) this.timings.shift();
       }
       this.dispatchEvent(
-        new CustomEvent('generated', { detail: { ...info, workerMs: ms, latency, bytes: this.glb.bytes.length } }),
+        new CustomEvent('generated', { detail: { ...info, workerMs: ms, latency, bytes: this.glb.bytes.length, carved } }),
       );
     } catch (err) {
       this.dispatchEvent(new CustomEvent('error', { detail: err }));

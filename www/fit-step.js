@@ -82,7 +82,7 @@ function colorNote(r) {
  * core's level, that it does not match and what to do (the core's sentence); then, when other
  * fits matched the photos as well but differ in 3D (the core's agreement below its level),
  * that the photos do not fix the shape. Empty without numbers.
- * @param {{ photo_ious?: number[], match_level?: number, match_warning?: string | null, agreement_warning?: string | null }} r
+ * @param {{ photo_ious?: number[], match_level?: number, match_warning?: string | null, agreement_warning?: string | null, carved_photo_iou?: number }} r
  */
 export function showMatch(r) {
   const ious = r.photo_ious ?? [];
@@ -95,7 +95,9 @@ export function showMatch(r) {
   const ambiguity = r.agreement_warning ? ` ${r.agreement_warning.charAt(0).toUpperCase()}${r.agreement_warning.slice(1)}.` : '';
   const each = ious.map((v, i) => `${ious.length > 1 ? `photo ${i + 1} ` : ''}${v.toFixed(2)}`).join(', ');
   const level = typeof r.match_level === 'number' ? r.match_level.toFixed(2) : '';
-  const numbers = `How well the fitted model matches ${ious.length > 1 ? 'each photo' : 'the photo'} (outline overlap, 1 = exact): ${each}.`;
+  // A tree's leaves are then carved where the photo sees through its crown: its overlap as shown.
+  const carved = typeof r.carved_photo_iou === 'number' ? ` With its leaves carved by the photo, pixel by pixel: ${r.carved_photo_iou.toFixed(2)}.` : '';
+  const numbers = `How well the fitted model matches ${ious.length > 1 ? 'each photo' : 'the photo'} (outline overlap, 1 = exact): ${each}.${carved}`;
   if (r.match_warning) {
     const why = r.match_warning.charAt(0).toUpperCase() + r.match_warning.slice(1);
     say(fitMatch, `${numbers} ${why}.${ambiguity}`, 'warn');
@@ -134,7 +136,7 @@ async function runFit({ generator, start = null }) {
     const lod = Math.max(state.editor.lod, specOf(r.generator)?.fitted_lod ?? 0);
     // A refit that kept the model keeps its colours too; a new fit brings the photos' colours.
     const colors = r.colors ?? (kept ? state.editor.colors : null);
-    chooseGenerator(r.generator, { params: r.params, lod, preset: 'fitted', cameras: r.cameras, colors });
+    chooseGenerator(r.generator, { params: r.params, lod, preset: 'fitted', cameras: r.cameras, colors, carveId: r.carve_id ?? null });
     say(
       fitMessage,
       out.cancelled

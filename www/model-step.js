@@ -51,16 +51,17 @@ function fillPresets(spec, selected) {
 /**
  * Switches to `name` with its first preset (or defaults), or with the given parameters.
  * @param {string} name
- * @param {{ params?: number[] | null, lod?: number | null, preset?: string, cameras?: number[], colors?: Record<string, number[]> | null }} [o]
+ * `carveId`: a tree fit's carving of the leaves by its photo (the worker's `carve_id`).
+ * @param {{ params?: number[] | null, lod?: number | null, preset?: string, cameras?: number[], colors?: Record<string, number[]> | null, carveId?: number | null }} [o]
  */
-export function chooseGenerator(name, { params = null, lod = null, preset = undefined, cameras = [], colors = null } = {}) {
+export function chooseGenerator(name, { params = null, lod = null, preset = undefined, cameras = [], colors = null, carveId = null } = {}) {
   const spec = state.specs.find((g) => g.name === name);
   if (!spec) return;
   $(`gen-${name}`).checked = true;
   const first = preset === undefined ? spec.presets[0] : null;
   fillPresets(spec, preset ?? first?.name ?? '');
   state.presetName = preset ?? first?.name ?? null;
-  state.editor.open(name, params ?? first?.values ?? null, lod ?? state.editor.lod, cameras, colors);
+  state.editor.open(name, params ?? first?.values ?? null, lod ?? state.editor.lod, cameras, colors, carveId);
   showPhotoColors();
   $('lod').value = String(state.editor.lod);
   renderWindowTools();
@@ -91,6 +92,8 @@ export function showPhotoColors() {
   const ed = state.editor;
   $('photo-colors-label').hidden = !ed.colors;
   /** @type {HTMLInputElement} */ ($('photo-colors')).checked = ed.useColors;
+  $('carve-leaves-label').hidden = !ed.carveId;
+  /** @type {HTMLInputElement} */ ($('carve-leaves')).checked = ed.useCarve;
 }
 
 /** @param {File} file */
@@ -127,6 +130,7 @@ export function setUpModelStep() {
     renderLegend();
   });
   $('photo-colors').addEventListener('change', (e) => editor.setUseColors(e.target.checked));
+  $('carve-leaves').addEventListener('change', (e) => editor.setUseCarve(e.target.checked));
   $('reframe').addEventListener('click', () => viewer.frame());
   $('undo').addEventListener('click', () => editor.undo());
   $('redo').addEventListener('click', () => editor.redo());
@@ -142,7 +146,13 @@ export function setUpModelStep() {
     $('download-glb').disabled = false;
     $('download-json').disabled = false;
     const latency = d.latency === null ? '' : ` · updated in ${Math.round(d.latency)} ms`;
-    $('viewer-info').textContent = `${d.parts.length} part${d.parts.length === 1 ? '' : 's'} · ${d.triangles.toLocaleString('en')} triangles · ${(d.bytes / 1024).toFixed(0)} KB${latency}`;
+    // A carving the worker no longer has (a fresh worker, a later tree fit): the toggle goes.
+    if (editor.carveId && editor.useCarve && !d.carved) {
+      editor.carveId = null;
+      showPhotoColors();
+    }
+    const carved = d.carved ? ' · leaves carved by the photo' : '';
+    $('viewer-info').textContent = `${d.parts.length} part${d.parts.length === 1 ? '' : 's'} · ${d.triangles.toLocaleString('en')} triangles · ${(d.bytes / 1024).toFixed(0)} KB${latency}${carved}`;
     renderLegend();
     updateButtons();
     // Every shown model is worth keeping (a drag fires no change event until it ends).

@@ -18,15 +18,18 @@ export const REQUESTS = Object.freeze({
   // → [{ name, label, version, differentiable, fit: 'gradients' | 'tree_ga' | null, display_name,
   //      fitted_lod: 0..3, mask_extra: 'none' | 'windows' | 'tree_labels', params, presets }]
   GENERATOR_SPECS: 'gen/specs',
-  // { generator, params: number[], lod: 0..3, cameras?: number[] } → { glb: ArrayBuffer, ms }:
+  // { generator, params: number[], lod: 0..3, cameras?: number[], carveId?: number | null }
+  // → { glb: ArrayBuffer, ms, carved }:
   // the model's mesh as the very GLB the page downloads (the viewer loads these bytes), with one
   // camera node per photo (`cameras`: 18 numbers each — yfov, aspect, camera-to-world matrix
-  // column-major — as a fit's result gives them); `ms` is the worker's time.
+  // column-major — as a fit's result gives them); `ms` is the worker's time. `carveId`: a tree
+  // fit's `carve_id`: the tree's leaves are carved by that fit's photo (`carved` says whether
+  // they were: only the last tree fit's carving is kept, and a fresh worker has none).
   GENERATE_GLB: 'gen/glb',
   // { a: { generator, params }, b: { generator, params }, lod, side } → { iou }: the paper's
   // IoU-64 between two models (for the benchmark).
   IOU64: 'eval/iou64',
-  // { generator, params, lod, cameras, format: 'glb'|'obj'|'stl', compact, fileName } →
+  // { generator, params, lod, cameras, format: 'glb'|'obj'|'stl', compact, fileName, carveId? } →
   // { files: ArrayBuffer[] }: the model as the download menu saves it ([obj, mtl] for OBJ).
   EXPORT_FILES: 'gen/export',
   // { generator, params, lod } → { text }: the params JSON of the model.
@@ -80,8 +83,10 @@ export const REQUESTS = Object.freeze({
   // { fitId, seed, quality, width, height, rgba, codes, start?: number[], focal_35mm?: number | null }
   // → { cancelled,
   // result: { generator (the tree generator's name), params, lod, seed, similarity, start_similarity, evaluations,
-  // cameras, photo_ious: [number], match_level, match_warning?: string } } (`start_similarity`:
-  // the start's, undefined without one; `match_warning`: a sentence when below the level).
+  // cameras, photo_ious: [number], match_level, match_warning?: string, carved_photo_iou,
+  // carve_id } } (`start_similarity`: the start's, undefined without one; `match_warning`: a
+  // sentence when below the level; `carve_id`: for GENERATE_GLB's `carveId`, the photo that
+  // carves the tree's leaves; `carved_photo_iou`: the photo-view IoU of the tree so carved).
   // `start`: the tree generator's parameters to refit from ("Refit from here"): the fit keeps
   // its `seed` parameter and never returns a tree less similar to the photo. On the way: event
   // 'progress'
@@ -97,7 +102,7 @@ export const REQUESTS = Object.freeze({
  * 'sys/ready' (`protocol`), and the page refuses a worker that speaks another one (an old
  * worker.js from a cache, say) with a message that says to reload.
  */
-export const PROTOCOL_VERSION = 11;
+export const PROTOCOL_VERSION = 12;
 
 /**
  * An error as it crosses the protocol: `panic` when a trap poisoned the worker.

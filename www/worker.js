@@ -23,17 +23,19 @@ const handlers = {
   [REQUESTS.THREAD_PROBE]: ({ jobs = 64 } = {}) => ({ threads: wasm.threadProbe(jobs) }),
   [REQUESTS.DEBUG_PANIC]: () => wasm.debugPanic(),
   [REQUESTS.GENERATOR_SPECS]: () => wasm.generatorSpecs(),
-  [REQUESTS.GENERATE_GLB]: ({ generator, params, lod, cameras = [], colors = null, useColors = true }) => {
+  [REQUESTS.GENERATE_GLB]: ({ generator, params, lod, cameras = [], colors = null, useColors = true, carveId = null }) => {
     const t0 = performance.now();
-    const bytes = wasm.generateGlb(generator, Float64Array.from(params), lod, Float32Array.from(cameras), partColors(colors, useColors));
+    const carve = carveOf(carveId);
+    const args = [generator, Float64Array.from(params), lod, Float32Array.from(cameras), partColors(colors, useColors)];
+    const bytes = carve ? wasm.generateCarvedGlb(...args, carve) : wasm.generateGlb(...args);
     const ms = performance.now() - t0;
     // wasm-bindgen returns a fresh copy, so its buffer can be handed over without another copy.
-    return new Transfer({ glb: bytes.buffer, ms }, [bytes.buffer]);
+    return new Transfer({ glb: bytes.buffer, ms, carved: !!carve }, [bytes.buffer]);
   },
-  [REQUESTS.EXPORT_FILES]: ({ generator, params, lod, cameras = [], colors = null, useColors = true, format, compact = false, fileName }) => {
-    const files = wasm
-      .exportFiles(generator, Float64Array.from(params), lod, Float32Array.from(cameras), partColors(colors, useColors), format, compact, fileName)
-      .map((bytes) => bytes.buffer);
+  [REQUESTS.EXPORT_FILES]: ({ generator, params, lod, cameras = [], colors = null, useColors = true, format, compact = false, fileName, carveId = null }) => {
+    const carve = carveOf(carveId);
+    const args = [generator, Float64Array.from(params), lod, Float32Array.from(cameras), partColors(colors, useColors), format, compact, fileName];
+    const files = (carve ? wasm.exportCarvedFiles(...args, carve) : wasm.exportFiles(...args)).map((bytes) => bytes.buffer);
     return new Transfer({ files }, files);
   },
   [REQUESTS.IOU64]: ({ a, b, lod = 1, side = 128 }) => ({
@@ -202,12 +204,25 @@ async function runFit({ fitId, generator, seed = 1, quality = 1, start = [], mas
 }
 
 /**
+ * The photo that carves the last tree fit's leaves (a wasm TreeCarve) and its id: one at a time,
+ * since it holds the photo's labels; a model carries the id while it shows that fit's tree.
+ */
+let treeCarve = null;
+// Random, so that an id saved with a model before a reload names no carving of a later worker.
+let treeCarveId = Math.floor(Math.random() * 2 ** 30);
+
+/** The carving a request names by `carveId`, or null (none, or not the last tree fit's). */
+function carveOf(carveId) {
+  return carveId && carveId === treeCarveId ? treeCarve : null;
+}
+
+/**
  * Steps a fit session (FitSession or TreeFitSession) in slices until it is done or cancelled,
  * emitting progress at stage changes, at least every PROGRESS_MS and whenever `preview(due)`
- * returns a picture ([picture, transfer]; `due` says progress goes out anyway); frees the
- * session at the end.
+ * returns a picture ([picture, transfer]; `due` says progress goes out anyway); `finish(result)`
+ * adds to the result before the session is freed at the end.
  */
-async function stepFit(fitId, session, emit, preview, colorsOf = () => null) {
+async function stepFit(fitId, session, emit, preview, colorsOf = () => null, finish = () => {}) {
   const job = { cancelled: false };
   fits.set(fitId, job);
   try {
@@ -231,6 +246,7 @@ async function stepFit(fitId, session, emit, preview, colorsOf = () => null) {
     // The part colours of the model the fit ends with (also when cancelled: it is shown).
     const colors = colorsOf();
     if (colors) Object.assign(result, { colors: colors.colors, colorParts: colors.parts, colorNote: colors.note });
+    finish(result);
     return { cancelled: job.cancelled, result };
   } finally {
     fits.delete(fitId);
@@ -259,7 +275,13 @@ async function runTreeFit({ fitId, seed = 1, quality = 1, width, height, rgba, c
     if (!w) return [null, []];
     const labels = session.previewLabels();
     return [{ width: w, height: session.previewHeight(), labels: labels.buffer }, [labels.buffer]];
-  }, () => session.partColors(width, height, labels, new Uint8Array(rgba)));
+  }, () => session.partColors(width, height, labels, new Uint8Array(rgba)), (result) => {
+    // The fitted tree's leaves are carved by its photo: the model names this carving.
+    treeCarve?.free();
+    treeCarve = session.carve();
+    treeCarveId += 1;
+    result.carve_id = treeCarveId;
+  });
 }
 
 /** A handler's result whose buffers move to the page instead of being copied. */

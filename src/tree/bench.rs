@@ -11,6 +11,7 @@
 //! `cargo bench --bench tree_bench` prints the table; `tests/tree_bench.rs` runs two cases.
 
 use super::TreeError;
+use super::carve::CARVE_GRID;
 use super::impostor::{PhotoFitOptions, silhouette_iou64, start_photo_fit_with};
 use crate::camera::{CameraPose, View};
 use crate::generators::Mesh;
@@ -355,24 +356,27 @@ pub struct BenchScore {
 }
 
 /// Fits `labels` (of the case's photo) as the CLI does, seed 1, with `budget` GA evaluations
-/// (`None`: the default), and scores the result (the caller times it).
+/// (`None`: the default), carves its leaves by the labels as the CLI does
+/// ([`CARVE_GRID`]), and scores the result (the caller times it).
 pub fn fit_case(
     case: &BenchCase,
     labels: &LabelImage,
     budget: Option<usize>,
     options: &PhotoFitOptions,
 ) -> Result<BenchScore, String> {
-    Ok(fit_case_mesh(case, labels, 1, budget, options)?.0)
+    Ok(fit_case_mesh(case, labels, 1, budget, options, Some(CARVE_GRID))?.0)
 }
 
-/// [`fit_case`] with the fit's seed, also returning the fitted mesh (MEDIUM) and its photo
-/// camera, for [`analyse_silhouette`].
+/// [`fit_case`] with the fit's seed and the carving's tiles per card side (`None`: the tree
+/// as generated), also returning the fitted mesh (MEDIUM, carved) and its photo camera, for
+/// [`analyse_silhouette`].
 pub fn fit_case_mesh(
     case: &BenchCase,
     labels: &LabelImage,
     seed: u64,
     budget: Option<usize>,
     options: &PhotoFitOptions,
+    carve: Option<usize>,
 ) -> Result<(BenchScore, Mesh, View), String> {
     let mut f = start_photo_fit_with(labels, seed, budget, None, options).map_err(|e| e.0)?;
     while !f.session.done() {
@@ -384,6 +388,15 @@ pub fn fit_case_mesh(
         .generate(&result.params, Lod::Medium)
         .map_err(|e| e.to_string())?;
     let photo_view = f.framing.photo_view().map_err(|e| e.0)?;
+    // The tree as the CLI writes it: carved by the photo's labels (the fit's input).
+    let mesh = match carve {
+        Some(grid) => {
+            super::carve::carve_leaves(&mesh, &photo_view, labels, grid)
+                .map_err(|e| e.0)?
+                .0
+        }
+        None => mesh,
+    };
     let base = f.framing.fit_view().map_err(|e| e.0)?;
     let fit_depth = (base.pose.position - DVec3::new(0.0, 6.0, 0.0)).length();
     let truth_view = case.view().map_err(|e| e.0)?;

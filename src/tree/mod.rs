@@ -11,6 +11,7 @@
 //! [`crate::mask::LabelImage::DONT_CARE`] for pixels that must not count).
 
 pub mod bench;
+pub mod carve;
 pub mod envelope;
 pub mod ga;
 pub mod impostor;

@@ -251,6 +251,23 @@ pub fn generate_glb(
     crate::glb::export_model(&model, &cameras).map_err(js)
 }
 
+/// [`generate_glb`] of a tree whose leaves `carve` carves (a fitted tree's photo,
+/// [`tree::TreeFitSession::carve`]); any other generator is written as [`generate_glb`] does.
+#[wasm_bindgen(js_name = generateCarvedGlb)]
+pub fn generate_carved_glb(
+    generator: &str,
+    params: &[f64],
+    lod: u8,
+    cameras: &[f32],
+    colors: JsValue,
+    carve: &tree::TreeCarve,
+) -> Result<Vec<u8>, JsError> {
+    let mut model = colored_model_of(generator, params, lod, colors)?;
+    model.carve = Some(carve.0.clone());
+    let cameras = cameras_of(cameras)?;
+    crate::glb::export_model(&model, &cameras).map_err(js)
+}
+
 /// The page's download menu: the model in `format` (`glb`, `obj` or `stl`; `compact` for a
 /// quantised GLB), as the files to save: `[main]`, or for OBJ `[obj, mtl]`, the OBJ naming its
 /// MTL after `file_name` (the name the main file is saved as).
@@ -269,12 +286,45 @@ pub fn export_files(
     compact: bool,
     file_name: &str,
 ) -> Result<js_sys::Array, JsError> {
-    use crate::export::{ExportOptions, Format};
     let model = colored_model_of(generator, params, lod, colors)?;
+    export_model_files(&model, cameras, format, compact, file_name)
+}
+
+/// [`export_files`] of a tree whose leaves `carve` carves (see [`generate_carved_glb`]).
+#[wasm_bindgen(js_name = exportCarvedFiles)]
+#[allow(
+    clippy::too_many_arguments,
+    reason = "flat values are what crosses the wasm boundary cheaply"
+)]
+pub fn export_carved_files(
+    generator: &str,
+    params: &[f64],
+    lod: u8,
+    cameras: &[f32],
+    colors: JsValue,
+    format: &str,
+    compact: bool,
+    file_name: &str,
+    carve: &tree::TreeCarve,
+) -> Result<js_sys::Array, JsError> {
+    let mut model = colored_model_of(generator, params, lod, colors)?;
+    model.carve = Some(carve.0.clone());
+    export_model_files(&model, cameras, format, compact, file_name)
+}
+
+/// The files of [`export_files`] for a model.
+fn export_model_files(
+    model: &crate::model::Model,
+    cameras: &[f32],
+    format: &str,
+    compact: bool,
+    file_name: &str,
+) -> Result<js_sys::Array, JsError> {
+    use crate::export::{ExportOptions, Format};
     let cameras = cameras_of(cameras)?;
     let format = Format::parse(format).map_err(|e| JsError::new(&e))?;
     let (files, _) = crate::export::write_model(
-        &model,
+        model,
         &cameras,
         format,
         ExportOptions { compact },

@@ -34,7 +34,13 @@
 //! //                          cameras: Float32Array-able number[18] (yfov, aspect, 16 floats
 //! //                          camera-to-world, column-major): the photo's camera for generateGlb,
 //! //                          photo_ious: [the photo-view IoU], match_level, match_warning
-//! //                          (a sentence when below the level, else undefined) }
+//! //                          (a sentence when below the level, else undefined),
+//! //                          carved_photo_iou: the photo-view IoU at the photo's size of the
+//! //                          tree as shown, HIGH with its leaves carved }
+//! // The photo that carves the tree's leaves where it sees through the crown: kept by the
+//! // worker and passed to generateCarvedGlb / exportCarvedFiles (generateGlb's and
+//! // exportFiles' arguments, then it) while the page shows this fit's tree, edited or not.
+//! const carve = fit.carve(); // a TreeCarve; carve.free() when done with it
 //! ```
 //!
 //! Deterministic for a seed. The preview is in the fit's square frame (the photo's tree
@@ -43,6 +49,7 @@
 use super::js;
 use crate::generators::Generator;
 use crate::mask::LabelImage;
+use crate::tree::carve::{CARVE_GRID, LeafCarve};
 use crate::tree::impostor::{
     Framing, PhotoFitOptions, PhotoTreeFit, TreeSession, ga_budget_for_quality,
     start_photo_fit_with,
@@ -57,7 +64,15 @@ pub struct TreeFitSession {
     framing: Framing,
     seed: u32,
     preview: Option<LabelImage>,
+    /// The photo's labels the fit uses, at the photo's size: what carves the result's leaves.
+    labels: LabelImage,
 }
+
+/// A fitted tree's photo that carves its leaves ([`crate::tree::carve::LeafCarve`]): made by
+/// [`TreeFitSession::carve`], passed to `generateCarvedGlb` and `exportCarvedFiles` while the
+/// page shows that fit's tree (the parameters may have been edited since).
+#[wasm_bindgen]
+pub struct TreeCarve(pub(crate) std::sync::Arc<LeafCarve>);
 
 #[derive(serde::Serialize)]
 struct StepOut {
@@ -86,11 +101,19 @@ struct ResultOut {
     photo_ious: Vec<f64>,
     /// The level below which the tree is said not to match (`eval::TREE_MATCH_LEVEL`).
     match_level: f64,
+    /// The photo-view IoU at the photo's size of the tree as the page shows it (HIGH, its
+    /// leaves carved by the photo, `carve`).
+    carved_photo_iou: f64,
     /// What is wrong and what to try when below the level (`None` otherwise).
     match_warning: Option<String>,
 }
 
 impl TreeFitSession {
+    fn leaf_carve(&self) -> Result<LeafCarve, JsError> {
+        let view = self.framing.photo_view().map_err(js)?;
+        LeafCarve::new(self.labels.clone(), view, CARVE_GRID).map_err(js)
+    }
+
     fn start(
         labels: &LabelImage,
         seed: u32,
@@ -113,6 +136,7 @@ impl TreeFitSession {
             framing,
             seed,
             preview: None,
+            labels: labels.clone(),
         })
     }
 }
@@ -274,6 +298,12 @@ impl TreeFitSession {
         super::colors_out(&found)
     }
 
+    /// The photo that carves this fit's tree: its labels and camera
+    /// ([`crate::tree::carve::CARVE_GRID`] tiles a card side).
+    pub fn carve(&self) -> Result<TreeCarve, JsError> {
+        Ok(TreeCarve(std::sync::Arc::new(self.leaf_carve()?)))
+    }
+
     /// The best tree so far (the result once done) and the photo's camera.
     pub fn result(&self) -> Result<JsValue, JsError> {
         let fit = self.session.result().map_err(js)?;
@@ -282,7 +312,14 @@ impl TreeFitSession {
             .to_floats()
             .to_vec();
         let iou = self.session.silhouette_iou().map_err(js)?;
+        let mesh = crate::generators::tree::TreeGenerator
+            .generate(&fit.params, crate::generators::Lod::High)
+            .map_err(js)?;
+        let (carved, _) = self.leaf_carve()?.apply(&mesh).map_err(js)?;
+        let carved_photo_iou =
+            crate::tree::bench::photo_view_iou(&carved, &view, &self.labels).map_err(js)?;
         let out = ResultOut {
+            carved_photo_iou,
             photo_ious: vec![iou],
             match_level: crate::reconstruct::eval::TREE_MATCH_LEVEL,
             match_warning: crate::reconstruct::eval::tree_match_warning(

@@ -163,6 +163,25 @@ test('the fitted tree downloads as a valid GLB with the photo camera', async () 
   assert.ok(maps.some((m) => m.startsWith('leaf:')) && maps.some((m) => m.startsWith('trunk:')), `textures in the view: ${maps}`);
 });
 
+test('the fitted tree\'s leaves are carved by its photo, and the toggle shows them all', async () => {
+  await settled();
+  // On by default after a fit: the view, the download and the match message say so.
+  assert.equal(await page.isVisible('#carve-leaves'), true, 'no carving toggle after a tree fit');
+  assert.equal(await page.isChecked('#carve-leaves'), true);
+  assert.match(await page.textContent('#viewer-info'), /leaves carved by the photo/);
+  assert.match(await messageOf('fit-match'), /With its leaves carved by the photo, pixel by pixel: [01]\.\d\d\./);
+  const triangles = async () => Number((await page.textContent('#viewer-info')).match(/([\d,]+) triangles/)[1].replace(/,/g, ''));
+  const carved = await triangles();
+  await page.uncheck('#carve-leaves');
+  await settled();
+  assert.doesNotMatch(await page.textContent('#viewer-info'), /leaves carved/);
+  const whole = await triangles();
+  assert.notEqual(carved, whole, 'carving changed no triangle');
+  await page.check('#carve-leaves');
+  await settled();
+  assert.equal(await triangles(), carved);
+});
+
 test('"Refit from here" refits the edited tree: its seed stays, it never gets less like the photo', async () => {
   // The fitted tree as a person left it: one slider moved by hand.
   await settled();

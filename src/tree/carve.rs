@@ -1,0 +1,408 @@
+//! Carving a fitted tree's leaves with its photo: where the photo sees through the crown (a
+//! background pixel inside it, or outside the tree), nothing lies anywhere on that pixel's ray,
+//! so a leaf card that projects there is wrong in 3D, whatever its depth. The generator places
+//! leaf clusters by its own random draws, which no fit can make match the photo's gaps one by
+//! one; carving removes the clusters the photo rules out.
+
+use super::{BACKGROUND, TreeError};
+use crate::camera::View;
+use crate::generators::Mesh;
+use crate::generators::tree::{LEAF_CARD_TRIANGLES, PART_LEAF};
+use crate::mask::LabelImage;
+use glam::{DVec2, Vec2, Vec3};
+
+/// What [`carve_leaves`] did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Carving {
+    /// Leaf cards in the fitted tree.
+    pub cards: usize,
+    /// Cards with at least one tile removed.
+    pub removed: usize,
+    /// Tiles the cards were cut into.
+    pub tiles: usize,
+    /// Tiles removed.
+    pub tiles_removed: usize,
+}
+
+/// Carves the leaf cards of `mesh` (a tree generator mesh: leaf cards of
+/// [`LEAF_CARD_TRIANGLES`] triangles, part [`PART_LEAF`], front pair first) with the photo
+/// `labels` seen through `view`: each card is cut into `n × n` tiles (texture
+/// coordinates split with them, so a leaf texture stays whole), and a tile is kept when its
+/// centre lands on a tree pixel (branch, leaf or don't-care; off the image counts as tree, the
+/// photo says nothing there); `n` is what makes a tile about [`TILE_SHARE`] of the image
+/// height on screen (at least 2 pixels), at most `grid`. Trunk and branches are kept as they
+/// are. Errors when the labels
+/// are not the view's size, `grid` is 0 or above 16, or the leaf triangles are not whole cards.
+pub fn carve_leaves(
+    mesh: &Mesh,
+    view: &View,
+    labels: &LabelImage,
+    grid: usize,
+) -> Result<(Mesh, Carving), TreeError> {
+    let (w, h) = (labels.width() as usize, labels.height() as usize);
+    if (labels.width(), labels.height()) != (view.width, view.height) {
+        return Err(TreeError(format!(
+            "the photo's labels are {w}×{h}, its view {}×{}",
+            view.width, view.height
+        )));
+    }
+    if !(1..=16).contains(&grid) {
+        return Err(TreeError(format!(
+            "a {grid}×{grid} carving grid is not within 1–16"
+        )));
+    }
+    let leaf_tris: Vec<usize> = (0..mesh.triangles.len())
+        .filter(|&t| mesh.tri_parts[t] == PART_LEAF)
+        .collect();
+    if !leaf_tris.len().is_multiple_of(LEAF_CARD_TRIANGLES) {
+        return Err(TreeError(format!(
+            "{} leaf triangles are not whole cards of {LEAF_CARD_TRIANGLES}",
+            leaf_tris.len()
+        )));
+    }
+    let proj = view.projector();
+    let tree_at = |p: Vec3| -> bool {
+        let (px, depth): (DVec2, f64) = proj.project(p);
+        if depth <= 0.0 || !px.x.is_finite() || !px.y.is_finite() {
+            return true;
+        }
+        let (x, y) = (px.x.floor(), px.y.floor());
+        if x < 0.0 || y < 0.0 || x >= w as f64 || y >= h as f64 {
+            return true;
+        }
+        labels.labels()[y as usize * w + x as usize] != BACKGROUND
+    };
+    let mut drop = vec![false; mesh.triangles.len()];
+    let mut out_cards: Vec<[(Vec3, Vec2); 4]> = Vec::new();
+    let mut normals: Vec<Vec3> = Vec::new();
+    let mut carving = Carving::default();
+    for card in leaf_tris.chunks(LEAF_CARD_TRIANGLES) {
+        carving.cards += 1;
+        for &t in card {
+            drop[t] = true;
+        }
+        // The front pair (0, 1, 2), (0, 2, 3): corners 0..3 in order, with their UVs.
+        let (t0, t1) = (card[0], card[1]);
+        let [a, b, c] = mesh.triangles[t0];
+        let d = mesh.triangles[t1][2];
+        let corner = |v: u32, uv: Vec2| (mesh.positions[v as usize], uv);
+        let q = [
+            corner(a, mesh.corner_uvs[3 * t0]),
+            corner(b, mesh.corner_uvs[3 * t0 + 1]),
+            corner(c, mesh.corner_uvs[3 * t0 + 2]),
+            corner(d, mesh.corner_uvs[3 * t1 + 2]),
+        ];
+        let normal = mesh.corner_normals[3 * t0];
+        // Bilinear over the card: s along corner 0 → 1, r along 0 → 3.
+        let at = |s: f32, r: f32| {
+            let lerp =
+                |i: usize, j: usize, k: f32| (q[i].0.lerp(q[j].0, k), q[i].1.lerp(q[j].1, k));
+            let (p0, u0) = lerp(0, 1, s);
+            let (p1, u1) = lerp(3, 2, s);
+            (p0.lerp(p1, r), u0.lerp(u1, r))
+        };
+        // Tiles a side: a tile about TILE_SHARE of the image on screen, at most `grid`.
+        let px: Vec<DVec2> = q.iter().map(|c| proj.project(c.0).0).collect();
+        let side = (0..4)
+            .map(|k| (px[k] - px[(k + 1) % 4]).length())
+            .fold(0.0f64, f64::max);
+        let tile = (TILE_SHARE * h as f64).max(2.0);
+        let grid = if side.is_finite() {
+            ((side / tile).ceil() as usize).clamp(1, grid)
+        } else {
+            grid
+        };
+        carving.tiles += grid * grid;
+        let g = grid as f32;
+        // Which tiles the photo keeps, row by row (r), then each row's runs of kept tiles as
+        // one quad, a run continuing the same run of the row before merged with it.
+        let mut kept = 0usize;
+        // Open rectangles: (first tile, past the last tile) along s, first row.
+        let mut open: Vec<(usize, usize, usize)> = Vec::new();
+        let mut rects: Vec<(usize, usize, usize, usize)> = Vec::new();
+        for j in 0..=grid {
+            let mut runs: Vec<(usize, usize)> = Vec::new();
+            if j < grid {
+                let mut start = None;
+                for i in 0..=grid {
+                    let on = i < grid && {
+                        let c = at((i as f32 + 0.5) / g, (j as f32 + 0.5) / g).0;
+                        tree_at(c)
+                    };
+                    kept += usize::from(on);
+                    match (on, start) {
+                        (true, None) => start = Some(i),
+                        (false, Some(s0)) => {
+                            runs.push((s0, i));
+                            start = None;
+                        }
+                        _ => {}
+                    }
+                }
+            }
+            let mut still = Vec::new();
+            for &(i0, i1, j0) in &open {
+                if runs.contains(&(i0, i1)) {
+                    still.push((i0, i1, j0));
+                } else {
+                    rects.push((i0, i1, j0, j));
+                }
+            }
+            for &(i0, i1) in &runs {
+                if !still.iter().any(|&(a, b, _)| (a, b) == (i0, i1)) {
+                    still.push((i0, i1, j));
+                }
+            }
+            open = still;
+        }
+        if kept < grid * grid {
+            carving.removed += 1;
+        }
+        carving.tiles_removed += grid * grid - kept;
+        for (i0, i1, j0, j1) in rects {
+            let (s0, s1) = (i0 as f32 / g, i1 as f32 / g);
+            let (r0, r1) = (j0 as f32 / g, j1 as f32 / g);
+            out_cards.push([at(s0, r0), at(s1, r0), at(s1, r1), at(s0, r1)]);
+            normals.push(normal);
+        }
+    }
+    let mut out = without_triangles(mesh, &drop);
+    for (tile, &n) in out_cards.iter().zip(&normals) {
+        let base = out.positions.len() as u32;
+        out.positions.extend(tile.iter().map(|c| c.0));
+        let (b, uv) = (base, [tile[0].1, tile[1].1, tile[2].1, tile[3].1]);
+        out.triangles.extend([
+            [b, b + 1, b + 2],
+            [b, b + 2, b + 3],
+            [b, b + 2, b + 1],
+            [b, b + 3, b + 2],
+        ]);
+        out.corner_normals.extend([n; 6]);
+        out.corner_normals.extend([-n; 6]);
+        out.corner_uvs
+            .extend([uv[0], uv[1], uv[2], uv[0], uv[2], uv[3]]);
+        out.corner_uvs
+            .extend([uv[0], uv[2], uv[1], uv[0], uv[3], uv[2]]);
+        out.tri_parts.extend([PART_LEAF; LEAF_CARD_TRIANGLES]);
+    }
+    Ok((out, carving))
+}
+
+/// `mesh` without the triangles marked in `drop`, its vertices compacted.
+fn without_triangles(mesh: &Mesh, drop: &[bool]) -> Mesh {
+    let mut out = Mesh {
+        parts: mesh.parts.clone(),
+        ..Mesh::default()
+    };
+    let mut remap = vec![u32::MAX; mesh.positions.len()];
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        if drop[t] {
+            continue;
+        }
+        let mut new = [0u32; 3];
+        for (k, &v) in tri.iter().enumerate() {
+            let slot = &mut remap[v as usize];
+            if *slot == u32::MAX {
+                *slot = out.positions.len() as u32;
+                out.positions.push(mesh.positions[v as usize]);
+            }
+            new[k] = *slot;
+        }
+        out.triangles.push(new);
+        out.corner_normals
+            .extend_from_slice(&mesh.corner_normals[3 * t..3 * t + 3]);
+        out.corner_uvs
+            .extend_from_slice(&mesh.corner_uvs[3 * t..3 * t + 3]);
+        out.tri_parts.push(mesh.tri_parts[t]);
+    }
+    out
+}
+
+/// The most tiles a side a leaf card is cut into by the carving of a fitted tree (the CLI's
+/// and the page's).
+pub const CARVE_GRID: usize = 12;
+
+/// The size of a carving tile on screen, as a share of the image height: cards are cut finer
+/// the larger they appear, up to the grid given ([`carve_leaves`]).
+pub const TILE_SHARE: f64 = 0.006;
+
+/// A photo that carves a tree's leaves: its labels, its camera and the tiles per card side
+/// ([`carve_leaves`]). Kept by a [`crate::model::Model`] so that every export of a fitted tree
+/// is carved alike.
+#[derive(Clone, Debug)]
+pub struct LeafCarve {
+    labels: LabelImage,
+    view: View,
+    grid: usize,
+}
+
+impl LeafCarve {
+    /// A carving by `labels` (the photo's, as the fit used them) seen through `view` (the
+    /// photo's camera in the fitted tree's frame). Errors when their sizes differ or `grid` is
+    /// not within 1–16.
+    pub fn new(labels: LabelImage, view: View, grid: usize) -> Result<LeafCarve, TreeError> {
+        if (labels.width(), labels.height()) != (view.width, view.height) {
+            return Err(TreeError(format!(
+                "the photo's labels are {}×{}, its view {}×{}",
+                labels.width(),
+                labels.height(),
+                view.width,
+                view.height
+            )));
+        }
+        if !(1..=16).contains(&grid) {
+            return Err(TreeError(format!(
+                "a {grid}×{grid} carving grid is not within 1–16"
+            )));
+        }
+        Ok(LeafCarve { labels, view, grid })
+    }
+
+    /// Tiles per card side.
+    pub fn grid(&self) -> usize {
+        self.grid
+    }
+
+    /// The photo's camera.
+    pub fn view(&self) -> &View {
+        &self.view
+    }
+
+    /// `mesh` carved ([`carve_leaves`]).
+    pub fn apply(&self, mesh: &Mesh) -> Result<(Mesh, Carving), TreeError> {
+        carve_leaves(mesh, &self.view, &self.labels, self.grid)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::generators::tree::{PART_BRANCH, PART_TRUNK, TreeGenerator, idx};
+    use crate::generators::{Generator, Lod};
+    use crate::tree::bench::{coverage_mask, mask_iou};
+    use crate::tree::impostor::tree_view;
+    use crate::tree::{BRANCH, LEAF};
+
+    const SIZE: u32 = 160;
+
+    fn tree() -> (Mesh, View) {
+        let params = TreeGenerator.defaults();
+        let mesh = TreeGenerator.generate(&params, Lod::Medium).unwrap();
+        let view = tree_view(SIZE, SIZE, params[idx::HEIGHT]).unwrap();
+        (mesh, view)
+    }
+
+    fn labels(mask: &[bool]) -> LabelImage {
+        LabelImage::new(
+            SIZE,
+            SIZE,
+            mask.iter()
+                .map(|&m| if m { LEAF } else { BACKGROUND })
+                .collect(),
+        )
+        .unwrap()
+    }
+
+    fn part_triangles(m: &Mesh, part: u8) -> usize {
+        m.tri_parts.iter().filter(|&&p| p == part).count()
+    }
+
+    fn leaves_only(m: &Mesh) -> Mesh {
+        let mut out = m.clone();
+        out.triangles = m
+            .triangles
+            .iter()
+            .zip(&m.tri_parts)
+            .filter(|(_, p)| **p == PART_LEAF)
+            .map(|(t, _)| *t)
+            .collect();
+        out
+    }
+
+    #[test]
+    fn a_photo_that_is_all_tree_keeps_every_leaf() {
+        let (mesh, view) = tree();
+        let all = LabelImage::new(SIZE, SIZE, vec![BRANCH; (SIZE * SIZE) as usize]).unwrap();
+        let (carved, c) = carve_leaves(&mesh, &view, &all, 4).unwrap();
+        assert!(c.cards > 50, "{c:?}");
+        assert_eq!((c.removed, c.tiles_removed), (0, 0));
+        carved.check().unwrap();
+        // Whole cards merge back into one quad each: the same triangles.
+        assert_eq!(carved.triangles.len(), mesh.triangles.len());
+        let iou = mask_iou(
+            &coverage_mask(&carved, &view).unwrap(),
+            &coverage_mask(&mesh, &view).unwrap(),
+        );
+        assert!(iou > 0.995, "{iou}");
+    }
+
+    #[test]
+    fn leaves_where_the_photo_sees_through_are_carved_and_stems_kept() {
+        let (mesh, view) = tree();
+        let w = SIZE as usize;
+        // The photo sees the sky through the tree's right half and through holes in a grid.
+        let covered = coverage_mask(&mesh, &view).unwrap();
+        let photo: Vec<bool> = covered
+            .iter()
+            .enumerate()
+            .map(|(i, &c)| {
+                let (x, y) = (i % w, i / w);
+                c && x < w / 2 && !(x % 12 < 4 && y % 12 < 4)
+            })
+            .collect();
+        let (carved, c) = carve_leaves(&mesh, &view, &labels(&photo), 4).unwrap();
+        carved.check().unwrap();
+        assert!(c.tiles_removed > 0 && c.removed > 0, "{c:?}");
+        for part in [PART_TRUNK, PART_BRANCH] {
+            assert_eq!(part_triangles(&carved, part), part_triangles(&mesh, part));
+        }
+        let leaves = coverage_mask(&leaves_only(&carved), &view).unwrap();
+        let right_of = |m: &[bool]| {
+            m.iter()
+                .enumerate()
+                .filter(|(i, l)| **l && i % w >= w / 2 + 4)
+                .count()
+        };
+        let right_before = right_of(&coverage_mask(&leaves_only(&mesh), &view).unwrap());
+        let left_before = coverage_mask(&leaves_only(&mesh), &view)
+            .unwrap()
+            .iter()
+            .enumerate()
+            .filter(|(i, l)| **l && i % w < w / 2 - 4)
+            .count();
+        let left = leaves
+            .iter()
+            .enumerate()
+            .filter(|(i, l)| **l && i % w < w / 2 - 4);
+        // Only tiles straddling the cut reach past it.
+        let right = right_of(&leaves);
+        assert!(
+            right * 50 < right_before,
+            "{right} of {right_before} leaf pixels right of the cut"
+        );
+        // The holes thin the left half, but most of it stays.
+        let kept = left.count() as f64 / left_before as f64;
+        assert!(kept > 0.6, "{kept}");
+        let before = mask_iou(&covered, &photo);
+        let after = mask_iou(&coverage_mask(&carved, &view).unwrap(), &photo);
+        assert!(
+            after > before + 0.1,
+            "photo-view IoU {before:.3} → {after:.3}"
+        );
+    }
+
+    #[test]
+    fn carving_refuses_a_photo_of_another_size_and_a_bad_grid() {
+        let (mesh, view) = tree();
+        let small = LabelImage::new(8, 8, vec![LEAF; 64]).unwrap();
+        let err = carve_leaves(&mesh, &view, &small, 4).unwrap_err();
+        assert!(err.0.contains("8×8"), "{err}");
+        let all = LabelImage::new(SIZE, SIZE, vec![LEAF; (SIZE * SIZE) as usize]).unwrap();
+        for grid in [0, 17] {
+            let err = carve_leaves(&mesh, &view, &all, grid).unwrap_err();
+            assert!(err.0.contains("grid"), "{err}");
+            assert!(LeafCarve::new(all.clone(), view, grid).is_err());
+        }
+        assert!(LeafCarve::new(small, view, 4).is_err());
+    }
+}
