@@ -330,6 +330,14 @@ impl Projector {
         let c = self.to_camera(p);
         (self.to_pixel(c), -c.z)
     }
+
+    /// The object-space point at `pixel` and `depth` (in front of the camera): the inverse of
+    /// [`Projector::project`]. `None` when the object transform is singular.
+    pub fn unproject(&self, pixel: DVec2, depth: f64) -> Option<DVec3> {
+        let d = (pixel - self.centre) * (depth / self.f);
+        let c = DVec3::new(d.x, -d.y, -depth);
+        (self.m.determinant().abs() > 1e-12).then(|| self.m.inverse() * (c - self.k))
+    }
 }
 
 #[cfg(test)]
@@ -351,6 +359,16 @@ mod tests {
         assert!(view.project(Vec3::new(0.0, 0.1, 0.0)).0.y < 24.0);
         assert!(CameraPose::look_at(DVec3::Y, DVec3::ZERO, DVec3::Y).is_err());
         assert!(CameraPose::look_at(DVec3::ZERO, DVec3::ZERO, DVec3::Y).is_err());
+    }
+
+    #[test]
+    fn unproject_inverts_project() {
+        let v = View::turntable(64, 48, 0.7, 4.0, 0.6, DVec3::new(0.0, 1.0, 0.0)).unwrap();
+        let p = Vec3::new(0.3, 1.2, -0.4);
+        let proj = v.projector();
+        let (px, depth) = proj.project(p);
+        let back = proj.unproject(px, depth).unwrap();
+        assert!((back - p.as_dvec3()).length() < 1e-5, "{back} vs {p}");
     }
 
     #[test]

@@ -72,9 +72,10 @@ pub struct ReconstructArgs {
     /// rest within 0–1), e.g. '{"leafHue":[330,170],"leafMinValue":0.45}' for autumn leaves.
     #[arg(long)]
     tree_colors: Option<String>,
-    /// Trees: keep every leaf cluster the generator makes. By default the written tree's leaf
-    /// cards are cut into tiles and a tile is dropped where the photo sees through the crown
-    /// (nothing lies on such a pixel's ray); the params JSON regenerates the uncarved tree.
+    /// Trees: write the tree as the generator makes it. By default the written tree's leaves
+    /// are carved by the photo: cards are added where the photo's foliage is uncovered, then
+    /// cut into tiles, a tile dropped where the photo sees through the crown (nothing lies on
+    /// such a pixel's ray); the params JSON regenerates the uncarved tree.
     #[arg(long)]
     no_carve: bool,
     /// Refit from a model: a params JSON or a GLB written by procfit (the page's "Refit from
@@ -790,8 +791,8 @@ fn reconstruct_tree(
     let carved = if a.no_carve {
         None
     } else {
-        let carve = LeafCarve::new(labels.clone(), photo_view, CARVE_GRID)
-            .map_err(|e| e.to_string())?;
+        let carve =
+            LeafCarve::new(labels.clone(), photo_view, CARVE_GRID).map_err(|e| e.to_string())?;
         let whole = model.mesh().map_err(|e| e.to_string())?;
         let (mesh, carving) = carve.apply(&whole).map_err(|e| e.to_string())?;
         let iou = |m: &Mesh| {
@@ -826,10 +827,11 @@ fn reconstruct_tree(
     );
     if let Some((c, (whole, carved))) = carved {
         println!(
-            "leaves carved by the photo: {} of {} tiles ({} leaf cards cut into up to \
-             {CARVE_GRID}×{CARVE_GRID}) dropped where it sees through the crown; photo-view IoU \
-             at the photo's size {whole:.3} → {carved:.3} (--no-carve keeps them all)",
-            c.tiles_removed, c.tiles, c.cards
+            "leaves carved by the photo: {} leaf cards added where the crown missed its \
+             foliage, {} of {} tiles ({} cards cut into up to {CARVE_GRID}×{CARVE_GRID}) \
+             dropped where it sees through the crown; photo-view IoU at the photo's size \
+             {whole:.3} → {carved:.3} (--no-carve keeps the tree as generated)",
+            c.added, c.tiles_removed, c.tiles, c.cards
         );
     }
     if let Some(w) = eval::tree_match_warning(

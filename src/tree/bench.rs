@@ -391,7 +391,8 @@ pub fn fit_case_mesh(
     // The tree as the CLI writes it: carved by the photo's labels (the fit's input).
     let mesh = match carve {
         Some(grid) => {
-            super::carve::carve_leaves(&mesh, &photo_view, labels, grid)
+            super::carve::LeafCarve::new(labels.clone(), photo_view, grid)
+                .and_then(|c| c.apply(&mesh))
                 .map_err(|e| e.0)?
                 .0
         }

@@ -4,7 +4,7 @@
 //! leaf clusters by its own random draws, which no fit can make match the photo's gaps one by
 //! one; carving removes the clusters the photo rules out.
 
-use super::{BACKGROUND, TreeError};
+use super::{BACKGROUND, LEAF, TreeError};
 use crate::camera::View;
 use crate::generators::Mesh;
 use crate::generators::tree::{LEAF_CARD_TRIANGLES, PART_LEAF};
@@ -22,6 +22,8 @@ pub struct Carving {
     pub tiles: usize,
     /// Tiles removed.
     pub tiles_removed: usize,
+    /// Cards added where the photo's foliage was uncovered ([`fill_leaves`]), among `cards`.
+    pub added: usize,
 }
 
 /// Carves the leaf cards of `mesh` (a tree generator mesh: leaf cards of
@@ -188,6 +190,129 @@ pub fn carve_leaves(
     Ok((out, carving))
 }
 
+/// Adds leaf cards where the photo `labels` (seen through `view`) shows foliage that `mesh`
+/// (a tree generator mesh) leaves uncovered: the image is cut into cells the size of the
+/// mesh's median leaf card on screen, and a cell that is mostly uncovered leaf pixels gets a
+/// card facing the camera over those pixels, at the median depth of the eight leaf cards
+/// nearest it on screen (so it sits in the crown, not in front of it or behind it). Returns
+/// the mesh with the cards appended (leaf part, welded corners, both faces) and how many were
+/// added; a mesh without leaf cards is returned as it is.
+pub fn fill_leaves(
+    mesh: &Mesh,
+    view: &View,
+    labels: &LabelImage,
+) -> Result<(Mesh, usize), TreeError> {
+    let (w, h) = (labels.width() as usize, labels.height() as usize);
+    if (labels.width(), labels.height()) != (view.width, view.height) {
+        return Err(TreeError(format!(
+            "the photo's labels are {w}×{h}, its view {}×{}",
+            view.width, view.height
+        )));
+    }
+    let proj = view.projector();
+    // Each card's centre on screen, its depth and its side on screen.
+    let mut cards: Vec<(DVec2, f64)> = Vec::new();
+    let mut sides: Vec<f64> = Vec::new();
+    let leaf_tris: Vec<usize> = (0..mesh.triangles.len())
+        .filter(|&t| mesh.tri_parts[t] == PART_LEAF)
+        .collect();
+    for card in leaf_tris.chunks(LEAF_CARD_TRIANGLES) {
+        let [a, b, c] = mesh.triangles[card[0]];
+        let px: Vec<(DVec2, f64)> = [a, b, c]
+            .iter()
+            .map(|&v| proj.project(mesh.positions[v as usize]))
+            .collect();
+        if px.iter().any(|p| p.1 <= 0.0 || !p.0.is_finite()) {
+            continue;
+        }
+        // Corners 0 and 2 are opposite: the card's centre.
+        cards.push(((px[0].0 + px[2].0) * 0.5, (px[0].1 + px[2].1) * 0.5));
+        sides.push(
+            (px[0].0 - px[1].0)
+                .length()
+                .max((px[1].0 - px[2].0).length()),
+        );
+    }
+    if cards.is_empty() {
+        return Ok((mesh.clone(), 0));
+    }
+    sides.sort_by(f64::total_cmp);
+    let cell = sides[sides.len() / 2].clamp(3.0, 0.1 * h as f64).round() as usize;
+    let covered = crate::tree::bench::coverage_mask(mesh, view)?;
+    let mut out = mesh.clone();
+    let mut added = 0;
+    for cy in (0..h).step_by(cell) {
+        for cx in (0..w).step_by(cell) {
+            let (x1, y1) = ((cx + cell).min(w), (cy + cell).min(h));
+            let (mut missed, mut sum) = (0usize, DVec2::ZERO);
+            for y in cy..y1 {
+                for x in cx..x1 {
+                    let i = y * w + x;
+                    if labels.labels()[i] == LEAF && !covered[i] {
+                        missed += 1;
+                        sum += DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
+                    }
+                }
+            }
+            if 2 * missed < (x1 - cx) * (y1 - cy) {
+                continue;
+            }
+            let at = sum / missed as f64;
+            // The median depth of the eight nearest cards on screen.
+            let mut near: Vec<(f64, f64)> = cards
+                .iter()
+                .map(|&(c, d)| ((c - at).length_squared(), d))
+                .collect();
+            let k = near.len().min(8);
+            near.select_nth_unstable_by(k - 1, |a, b| a.0.total_cmp(&b.0));
+            let mut depths: Vec<f64> = near[..k].iter().map(|n| n.1).collect();
+            depths.sort_by(f64::total_cmp);
+            let depth = depths[k / 2];
+            let half = 0.5 * cell as f64;
+            let corner = |dx: f64, dy: f64| proj.unproject(at + DVec2::new(dx, dy), depth);
+            let (Some(p0), Some(p1), Some(p2), Some(p3)) = (
+                corner(-half, half),
+                corner(half, half),
+                corner(half, -half),
+                corner(-half, -half),
+            ) else {
+                continue;
+            };
+            // Facing the camera: towards it along the pixel's ray.
+            let Some(nearer) = proj.unproject(at, 0.9 * depth) else {
+                continue;
+            };
+            let Some(here) = proj.unproject(at, depth) else {
+                continue;
+            };
+            let n = (nearer - here).normalize_or_zero().as_vec3();
+            let b = out.positions.len() as u32;
+            out.positions.extend([p0, p1, p2, p3].map(|p| p.as_vec3()));
+            out.triangles.extend([
+                [b, b + 1, b + 2],
+                [b, b + 2, b + 3],
+                [b, b + 2, b + 1],
+                [b, b + 3, b + 2],
+            ]);
+            out.corner_normals.extend([n; 6]);
+            out.corner_normals.extend([-n; 6]);
+            let uv = [
+                Vec2::new(0.0, 0.0),
+                Vec2::new(1.0, 0.0),
+                Vec2::new(1.0, 1.0),
+                Vec2::new(0.0, 1.0),
+            ];
+            out.corner_uvs
+                .extend([uv[0], uv[1], uv[2], uv[0], uv[2], uv[3]]);
+            out.corner_uvs
+                .extend([uv[0], uv[2], uv[1], uv[0], uv[3], uv[2]]);
+            out.tri_parts.extend([PART_LEAF; LEAF_CARD_TRIANGLES]);
+            added += 1;
+        }
+    }
+    Ok((out, added))
+}
+
 /// `mesh` without the triangles marked in `drop`, its vertices compacted.
 fn without_triangles(mesh: &Mesh, drop: &[bool]) -> Mesh {
     let mut out = Mesh {
@@ -220,11 +345,11 @@ fn without_triangles(mesh: &Mesh, drop: &[bool]) -> Mesh {
 
 /// The most tiles a side a leaf card is cut into by the carving of a fitted tree (the CLI's
 /// and the page's).
-pub const CARVE_GRID: usize = 12;
+pub const CARVE_GRID: usize = 16;
 
 /// The size of a carving tile on screen, as a share of the image height: cards are cut finer
 /// the larger they appear, up to the grid given ([`carve_leaves`]).
-pub const TILE_SHARE: f64 = 0.006;
+pub const TILE_SHARE: f64 = 0.003;
 
 /// A photo that carves a tree's leaves: its labels, its camera and the tiles per card side
 /// ([`carve_leaves`]). Kept by a [`crate::model::Model`] so that every export of a fitted tree
@@ -268,9 +393,13 @@ impl LeafCarve {
         &self.view
     }
 
-    /// `mesh` carved ([`carve_leaves`]).
+    /// `mesh` with leaf cards added where the photo's foliage is uncovered ([`fill_leaves`]),
+    /// then carved ([`carve_leaves`]).
     pub fn apply(&self, mesh: &Mesh) -> Result<(Mesh, Carving), TreeError> {
-        carve_leaves(mesh, &self.view, &self.labels, self.grid)
+        let (filled, added) = fill_leaves(mesh, &self.view, &self.labels)?;
+        let (carved, mut carving) = carve_leaves(&filled, &self.view, &self.labels, self.grid)?;
+        carving.added = added;
+        Ok((carved, carving))
     }
 }
 
@@ -389,6 +518,58 @@ mod tests {
             after > before + 0.1,
             "photo-view IoU {before:.3} → {after:.3}"
         );
+    }
+
+    #[test]
+    fn foliage_the_tree_misses_gets_cards_inside_the_crown() {
+        let (mesh, view) = tree();
+        let w = SIZE as usize;
+        let covered = coverage_mask(&mesh, &view).unwrap();
+        // Nothing uncovered: nothing added.
+        let (same, added) = fill_leaves(&mesh, &view, &labels(&covered)).unwrap();
+        assert_eq!((added, same.triangles.len()), (0, mesh.triangles.len()));
+        // A patch of foliage beside the crown, where the tree has nothing.
+        let (xs, ys): (Vec<usize>, Vec<usize>) = (0..covered.len())
+            .filter(|&i| covered[i])
+            .map(|i| (i % w, i / w))
+            .unzip();
+        let right = *xs.iter().max().unwrap();
+        let mid = (ys.iter().min().unwrap() + ys.iter().max().unwrap()) / 2;
+        let patch = |i: usize| {
+            let (x, y) = (i % w, i / w);
+            x > right && x <= right + 16 && y + 8 >= mid && y <= mid + 8
+        };
+        let photo: Vec<bool> = (0..covered.len()).map(|i| covered[i] || patch(i)).collect();
+        let (filled, added) = fill_leaves(&mesh, &view, &labels(&photo)).unwrap();
+        filled.check().unwrap();
+        assert!(added > 0, "no card added");
+        let now = coverage_mask(&filled, &view).unwrap();
+        let inside = (0..now.len()).filter(|&i| patch(i)).count();
+        let got = (0..now.len()).filter(|&i| patch(i) && now[i]).count();
+        assert!(
+            got * 10 > inside * 7,
+            "{got} of {inside} patch pixels covered"
+        );
+        // The new cards sit at the crown's depths, not at the camera or far behind.
+        let proj = view.projector();
+        let depths = |m: &Mesh, from: usize| -> Vec<f64> {
+            m.triangles[from..]
+                .iter()
+                .zip(&m.tri_parts[from..])
+                .filter(|(_, p)| **p == PART_LEAF)
+                .map(|(t, _)| proj.project(m.positions[t[0] as usize]).1)
+                .collect()
+        };
+        let old = depths(&mesh, 0);
+        let (lo, hi) = old
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(a, b), &d| (a.min(d), b.max(d)));
+        for d in depths(&filled, mesh.triangles.len()) {
+            assert!(
+                d >= lo && d <= hi,
+                "a card at depth {d}, the crown's {lo}–{hi}"
+            );
+        }
     }
 
     #[test]
