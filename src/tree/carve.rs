@@ -170,24 +170,30 @@ pub fn carve_leaves(
     }
     let mut out = without_triangles(mesh, &drop);
     for (tile, &n) in out_cards.iter().zip(&normals) {
-        let base = out.positions.len() as u32;
-        out.positions.extend(tile.iter().map(|c| c.0));
-        let (b, uv) = (base, [tile[0].1, tile[1].1, tile[2].1, tile[3].1]);
-        out.triangles.extend([
-            [b, b + 1, b + 2],
-            [b, b + 2, b + 3],
-            [b, b + 2, b + 1],
-            [b, b + 3, b + 2],
-        ]);
-        out.corner_normals.extend([n; 6]);
-        out.corner_normals.extend([-n; 6]);
-        out.corner_uvs
-            .extend([uv[0], uv[1], uv[2], uv[0], uv[2], uv[3]]);
-        out.corner_uvs
-            .extend([uv[0], uv[2], uv[1], uv[0], uv[3], uv[2]]);
-        out.tri_parts.extend([PART_LEAF; LEAF_CARD_TRIANGLES]);
+        push_card(&mut out, tile, n);
     }
     Ok((out, carving))
+}
+
+/// Appends a double-sided leaf card with corners `q` (position, texture coordinate; counter-
+/// clockwise seen from `n`'s side) as the generator lays one out: front pair, then back pair.
+fn push_card(out: &mut Mesh, q: &[(Vec3, Vec2); 4], n: Vec3) {
+    let b = out.positions.len() as u32;
+    out.positions.extend(q.iter().map(|c| c.0));
+    let uv = q.map(|c| c.1);
+    out.triangles.extend([
+        [b, b + 1, b + 2],
+        [b, b + 2, b + 3],
+        [b, b + 2, b + 1],
+        [b, b + 3, b + 2],
+    ]);
+    out.corner_normals.extend([n; 6]);
+    out.corner_normals.extend([-n; 6]);
+    out.corner_uvs
+        .extend([uv[0], uv[1], uv[2], uv[0], uv[2], uv[3]]);
+    out.corner_uvs
+        .extend([uv[0], uv[2], uv[1], uv[0], uv[3], uv[2]]);
+    out.tri_parts.extend([PART_LEAF; LEAF_CARD_TRIANGLES]);
 }
 
 /// Adds leaf cards where the photo `labels` (seen through `view`) shows foliage that `mesh`
@@ -286,27 +292,14 @@ pub fn fill_leaves(
                 continue;
             };
             let n = (nearer - here).normalize_or_zero().as_vec3();
-            let b = out.positions.len() as u32;
-            out.positions.extend([p0, p1, p2, p3].map(|p| p.as_vec3()));
-            out.triangles.extend([
-                [b, b + 1, b + 2],
-                [b, b + 2, b + 3],
-                [b, b + 2, b + 1],
-                [b, b + 3, b + 2],
-            ]);
-            out.corner_normals.extend([n; 6]);
-            out.corner_normals.extend([-n; 6]);
+            let corners = [p0, p1, p2, p3].map(|p| p.as_vec3());
             let uv = [
                 Vec2::new(0.0, 0.0),
                 Vec2::new(1.0, 0.0),
                 Vec2::new(1.0, 1.0),
                 Vec2::new(0.0, 1.0),
             ];
-            out.corner_uvs
-                .extend([uv[0], uv[1], uv[2], uv[0], uv[2], uv[3]]);
-            out.corner_uvs
-                .extend([uv[0], uv[2], uv[1], uv[0], uv[3], uv[2]]);
-            out.tri_parts.extend([PART_LEAF; LEAF_CARD_TRIANGLES]);
+            push_card(&mut out, &[0, 1, 2, 3].map(|k| (corners[k], uv[k])), n);
             added += 1;
         }
     }
