@@ -367,17 +367,27 @@ pub fn fit_case(
     Ok(fit_case_mesh(case, labels, 1, budget, options, Some(CARVE_GRID))?.0)
 }
 
-/// [`fit_case`] with the fit's seed and the carving's tiles per card side (`None`: the tree
-/// as generated), also returning the fitted mesh (MEDIUM, carved) and its photo camera, for
-/// [`analyse_silhouette`].
-pub fn fit_case_mesh(
-    case: &BenchCase,
+/// A case's fitted tree as the CLI writes it, before it is scored ([`fit_case_tree`]).
+pub struct FittedTree {
+    /// The fitted tree (MEDIUM), carved when asked.
+    pub mesh: Mesh,
+    /// The photo's camera for it.
+    pub photo_view: View,
+    /// The fit's view (the fitted tree's frame).
+    pub fit_view: View,
+    /// The paper's similarity (eq. 3) of the fit.
+    pub similarity: f64,
+}
+
+/// The fit of [`fit_case`] with the fit's seed and the carving's largest tiles per card side
+/// (`None`: the tree as generated), without the scoring: what a user waits for.
+pub fn fit_case_tree(
     labels: &LabelImage,
     seed: u64,
     budget: Option<usize>,
     options: &PhotoFitOptions,
     carve: Option<usize>,
-) -> Result<(BenchScore, Mesh, View), String> {
+) -> Result<FittedTree, String> {
     let mut f = start_photo_fit_with(labels, seed, budget, None, options).map_err(|e| e.0)?;
     while !f.session.done() {
         f.session.step();
@@ -398,16 +408,45 @@ pub fn fit_case_mesh(
         }
         None => mesh,
     };
-    let base = f.framing.fit_view().map_err(|e| e.0)?;
-    let fit_depth = (base.pose.position - DVec3::new(0.0, 6.0, 0.0)).length();
+    Ok(FittedTree {
+        mesh,
+        photo_view,
+        fit_view: f.framing.fit_view().map_err(|e| e.0)?,
+        similarity,
+    })
+}
+
+/// Scores a [`FittedTree`] of `case`: IoU-64 in the truth's frame, photo-view IoU.
+pub fn score_case(case: &BenchCase, fit: &FittedTree) -> Result<BenchScore, String> {
+    let fit_depth = (fit.fit_view.pose.position - DVec3::new(0.0, 6.0, 0.0)).length();
     let truth_view = case.view().map_err(|e| e.0)?;
     let c = &case.camera;
     let truth_depth = (DVec3::from_array(c.position) - DVec3::from_array(c.target)).length();
-    let moved = to_truth_frame(&mesh, &photo_view, fit_depth, &truth_view, truth_depth);
-    let score = BenchScore {
-        similarity,
+    let moved = to_truth_frame(
+        &fit.mesh,
+        &fit.photo_view,
+        fit_depth,
+        &truth_view,
+        truth_depth,
+    );
+    Ok(BenchScore {
+        similarity: fit.similarity,
         iou64: silhouette_iou64(&case.truth, &moved, 128).map_err(|e| e.0)?,
-        photo_iou: photo_view_iou(&mesh, &photo_view, &case.labels).map_err(|e| e.0)?,
-    };
-    Ok((score, mesh, photo_view))
+        photo_iou: photo_view_iou(&fit.mesh, &fit.photo_view, &case.labels).map_err(|e| e.0)?,
+    })
+}
+
+/// [`fit_case_tree`] then [`score_case`]: the scores, the fitted mesh (MEDIUM, carved) and its
+/// photo camera, for [`analyse_silhouette`].
+pub fn fit_case_mesh(
+    case: &BenchCase,
+    labels: &LabelImage,
+    seed: u64,
+    budget: Option<usize>,
+    options: &PhotoFitOptions,
+    carve: Option<usize>,
+) -> Result<(BenchScore, Mesh, View), String> {
+    let fit = fit_case_tree(labels, seed, budget, options, carve)?;
+    let score = score_case(case, &fit)?;
+    Ok((score, fit.mesh, fit.photo_view))
 }
