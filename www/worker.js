@@ -222,7 +222,7 @@ function carveOf(carveId) {
  * returns a picture ([picture, transfer]; `due` says progress goes out anyway); `finish(result)`
  * adds to the result before the session is freed at the end.
  */
-async function stepFit(fitId, session, emit, preview, colorsOf = () => null, finish = () => {}) {
+async function stepFit(fitId, session, emit, preview, colorsOf = () => null, finish = (/** @type {any} */ _result) => {}) {
   const job = { cancelled: false };
   fits.set(fitId, job);
   try {
