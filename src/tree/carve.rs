@@ -34,35 +34,20 @@ pub struct Carving {
 /// photo says nothing there); `n` is what makes a tile about [`TILE_SHARE`] of the image
 /// height on screen (at least 2 pixels), at most `grid`. Trunk and branches are kept as they
 /// are. Errors when the labels
-/// are not the view's size, `grid` is 0 or above 16, or the leaf triangles are not whole cards.
+/// are not the view's size, `grid` is not within 1–[`CARVE_GRID`], or the leaf triangles are not whole cards.
 pub fn carve_leaves(
     mesh: &Mesh,
     view: &View,
     labels: &LabelImage,
     grid: usize,
 ) -> Result<(Mesh, Carving), TreeError> {
+    check_size(labels, view)?;
+    check_grid(grid)?;
     let (w, h) = (labels.width() as usize, labels.height() as usize);
-    if (labels.width(), labels.height()) != (view.width, view.height) {
-        return Err(TreeError(format!(
-            "the photo's labels are {w}×{h}, its view {}×{}",
-            view.width, view.height
-        )));
-    }
-    if !(1..=16).contains(&grid) {
-        return Err(TreeError(format!(
-            "a {grid}×{grid} carving grid is not within 1–16"
-        )));
-    }
-    let leaf_tris: Vec<usize> = (0..mesh.triangles.len())
-        .filter(|&t| mesh.tri_parts[t] == PART_LEAF)
-        .collect();
-    if !leaf_tris.len().is_multiple_of(LEAF_CARD_TRIANGLES) {
-        return Err(TreeError(format!(
-            "{} leaf triangles are not whole cards of {LEAF_CARD_TRIANGLES}",
-            leaf_tris.len()
-        )));
-    }
+    let leaf_tris = leaf_triangles(mesh)?;
     let proj = view.projector();
+    // Tiles about TILE_SHARE of the image on screen.
+    let tile = (TILE_SHARE * h as f64).max(2.0);
     let tree_at = |p: Vec3| -> bool {
         let (px, depth): (DVec2, f64) = proj.project(p);
         if depth <= 0.0 || !px.x.is_finite() || !px.y.is_finite() {
@@ -75,8 +60,8 @@ pub fn carve_leaves(
         labels.labels()[y as usize * w + x as usize] != BACKGROUND
     };
     let mut drop = vec![false; mesh.triangles.len()];
-    let mut out_cards: Vec<[(Vec3, Vec2); 4]> = Vec::new();
-    let mut normals: Vec<Vec3> = Vec::new();
+    // The kept quads, each with its card's normal.
+    let mut kept_quads: Vec<([(Vec3, Vec2); 4], Vec3)> = Vec::new();
     let mut carving = Carving::default();
     for card in leaf_tris.chunks(LEAF_CARD_TRIANGLES) {
         carving.cards += 1;
@@ -103,12 +88,11 @@ pub fn carve_leaves(
             let (p1, u1) = lerp(3, 2, s);
             (p0.lerp(p1, r), u0.lerp(u1, r))
         };
-        // Tiles a side: a tile about TILE_SHARE of the image on screen, at most `grid`.
+        // Tiles a side: a tile about `tile` pixels on screen, at most `grid`.
         let px: Vec<DVec2> = q.iter().map(|c| proj.project(c.0).0).collect();
         let side = (0..4)
             .map(|k| (px[k] - px[(k + 1) % 4]).length())
             .fold(0.0f64, f64::max);
-        let tile = (TILE_SHARE * h as f64).max(2.0);
         let grid = if side.is_finite() {
             ((side / tile).ceil() as usize).clamp(1, grid)
         } else {
@@ -164,13 +148,12 @@ pub fn carve_leaves(
         for (i0, i1, j0, j1) in rects {
             let (s0, s1) = (i0 as f32 / g, i1 as f32 / g);
             let (r0, r1) = (j0 as f32 / g, j1 as f32 / g);
-            out_cards.push([at(s0, r0), at(s1, r0), at(s1, r1), at(s0, r1)]);
-            normals.push(normal);
+            kept_quads.push(([at(s0, r0), at(s1, r0), at(s1, r1), at(s0, r1)], normal));
         }
     }
     let mut out = without_triangles(mesh, &drop);
-    for (tile, &n) in out_cards.iter().zip(&normals) {
-        push_card(&mut out, tile, n);
+    for (quad, n) in &kept_quads {
+        push_card(&mut out, quad, *n);
     }
     Ok((out, carving))
 }
@@ -208,21 +191,13 @@ pub fn fill_leaves(
     view: &View,
     labels: &LabelImage,
 ) -> Result<(Mesh, usize), TreeError> {
+    check_size(labels, view)?;
     let (w, h) = (labels.width() as usize, labels.height() as usize);
-    if (labels.width(), labels.height()) != (view.width, view.height) {
-        return Err(TreeError(format!(
-            "the photo's labels are {w}×{h}, its view {}×{}",
-            view.width, view.height
-        )));
-    }
     let proj = view.projector();
     // Each card's centre on screen, its depth and its side on screen.
     let mut cards: Vec<(DVec2, f64)> = Vec::new();
     let mut sides: Vec<f64> = Vec::new();
-    let leaf_tris: Vec<usize> = (0..mesh.triangles.len())
-        .filter(|&t| mesh.tri_parts[t] == PART_LEAF)
-        .collect();
-    for card in leaf_tris.chunks(LEAF_CARD_TRIANGLES) {
+    for card in leaf_triangles(mesh)?.chunks(LEAF_CARD_TRIANGLES) {
         let [a, b, c] = mesh.triangles[card[0]];
         let px: Vec<(DVec2, f64)> = [a, b, c]
             .iter()
@@ -306,6 +281,45 @@ pub fn fill_leaves(
     Ok((out, added))
 }
 
+/// The leaf triangles of `mesh` (part [`PART_LEAF`]), in order: whole cards of
+/// [`LEAF_CARD_TRIANGLES`], or an error.
+fn leaf_triangles(mesh: &Mesh) -> Result<Vec<usize>, TreeError> {
+    let leaf_tris: Vec<usize> = (0..mesh.triangles.len())
+        .filter(|&t| mesh.tri_parts[t] == PART_LEAF)
+        .collect();
+    if !leaf_tris.len().is_multiple_of(LEAF_CARD_TRIANGLES) {
+        return Err(TreeError(format!(
+            "{} leaf triangles are not whole cards of {LEAF_CARD_TRIANGLES}",
+            leaf_tris.len()
+        )));
+    }
+    Ok(leaf_tris)
+}
+
+/// The photo's labels must be its view's size.
+fn check_size(labels: &LabelImage, view: &View) -> Result<(), TreeError> {
+    if (labels.width(), labels.height()) != (view.width, view.height) {
+        return Err(TreeError(format!(
+            "the photo's labels are {}×{}, its view {}×{}",
+            labels.width(),
+            labels.height(),
+            view.width,
+            view.height
+        )));
+    }
+    Ok(())
+}
+
+/// A carving grid must be within 1–[`CARVE_GRID`].
+fn check_grid(grid: usize) -> Result<(), TreeError> {
+    if !(1..=CARVE_GRID).contains(&grid) {
+        return Err(TreeError(format!(
+            "a {grid}×{grid} carving grid is not within 1–{CARVE_GRID}"
+        )));
+    }
+    Ok(())
+}
+
 /// `mesh` without the triangles marked in `drop`, its vertices compacted.
 fn without_triangles(mesh: &Mesh, drop: &[bool]) -> Mesh {
     let mut out = Mesh {
@@ -337,7 +351,7 @@ fn without_triangles(mesh: &Mesh, drop: &[bool]) -> Mesh {
 }
 
 /// The most tiles a side a leaf card is cut into by the carving of a fitted tree (the CLI's
-/// and the page's).
+/// and the page's), and the largest grid a carving takes.
 pub const CARVE_GRID: usize = 16;
 
 /// The size of a carving tile on screen, as a share of the image height: cards are cut finer
@@ -357,33 +371,16 @@ pub struct LeafCarve {
 impl LeafCarve {
     /// A carving by `labels` (the photo's, as the fit used them) seen through `view` (the
     /// photo's camera in the fitted tree's frame). Errors when their sizes differ or `grid` is
-    /// not within 1–16.
+    /// not within 1–[`CARVE_GRID`].
     pub fn new(labels: LabelImage, view: View, grid: usize) -> Result<LeafCarve, TreeError> {
-        if (labels.width(), labels.height()) != (view.width, view.height) {
-            return Err(TreeError(format!(
-                "the photo's labels are {}×{}, its view {}×{}",
-                labels.width(),
-                labels.height(),
-                view.width,
-                view.height
-            )));
-        }
-        if !(1..=16).contains(&grid) {
-            return Err(TreeError(format!(
-                "a {grid}×{grid} carving grid is not within 1–16"
-            )));
-        }
+        check_size(&labels, &view)?;
+        check_grid(grid)?;
         Ok(LeafCarve { labels, view, grid })
     }
 
     /// Tiles per card side.
     pub fn grid(&self) -> usize {
         self.grid
-    }
-
-    /// The photo's camera.
-    pub fn view(&self) -> &View {
-        &self.view
     }
 
     /// `mesh` with leaf cards added where the photo's foliage is uncovered ([`fill_leaves`]),
