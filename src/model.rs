@@ -70,7 +70,7 @@ pub struct Model {
     pub seed: Option<u64>,
     /// Per-part base colours (from the photos); empty: the generator's defaults.
     pub colors: PartColors,
-    /// A tree's photo, which carves its leaves where it sees through the crown
+    /// A tree's photo, which carves its leaves, trunk and branches where it sees through the tree
     /// ([`crate::tree::carve`]); `None` for any other model, or a tree as generated. Not in the
     /// params document: the parameters regenerate the uncarved tree.
     pub carve: Option<Arc<LeafCarve>>,

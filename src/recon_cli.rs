@@ -72,10 +72,10 @@ pub struct ReconstructArgs {
     /// rest within 0–1), e.g. '{"leafHue":[330,170],"leafMinValue":0.45}' for autumn leaves.
     #[arg(long)]
     tree_colors: Option<String>,
-    /// Trees: write the tree as the generator makes it. By default the written tree's leaves
-    /// are carved by the photo: cards are added where the photo's foliage is uncovered, then
-    /// cut into tiles, a tile dropped where the photo sees through the crown (nothing lies on
-    /// such a pixel's ray); the params JSON regenerates the uncarved tree.
+    /// Trees: write the tree as the generator makes it. By default the written tree is carved
+    /// by the photo: leaf cards are added where the photo's foliage is uncovered, then leaves,
+    /// trunk and branches are cut into tiles, a tile dropped where the photo sees through the
+    /// tree (nothing lies on such a pixel's ray); the params JSON regenerates the uncarved tree.
     #[arg(long)]
     no_carve: bool,
     /// Refit from a model: a params JSON or a GLB written by procfit (the page's "Refit from
@@ -827,11 +827,12 @@ fn reconstruct_tree(
     );
     if let Some((c, (whole, carved))) = carved {
         println!(
-            "leaves carved by the photo: {} leaf cards added where the crown missed its \
-             foliage, {} of {} tiles ({} cards cut into up to {CARVE_GRID}×{CARVE_GRID}) \
-             dropped where it sees through the crown; photo-view IoU at the photo's size \
-             {whole:.3} → {carved:.3} (--no-carve keeps the tree as generated)",
-            c.added, c.tiles_removed, c.tiles, c.cards
+            "carved by the photo: {} leaf cards added where the crown missed its \
+             foliage, {} of {} leaf tiles ({} cards cut into up to {CARVE_GRID}×{CARVE_GRID}) \
+             dropped where it sees through the crown, {} trunk and branch triangles cut where \
+             it sees sky; photo-view IoU at the photo's size {whole:.3} → {carved:.3} \
+             (--no-carve keeps the tree as generated)",
+            c.added, c.tiles_removed, c.tiles, c.cards, c.stems
         );
     }
     if let Some(w) = eval::tree_match_warning(

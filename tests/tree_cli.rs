@@ -107,11 +107,11 @@ fn photo_to_glb_with_its_camera() {
     println!("input-view IoU {iou:.3}");
     assert!(iou > 0.5, "input-view IoU {iou}");
 
-    // The leaves were carved by the photo: said, with the photo-view IoU before and after, and
-    // the carving made it no worse. `--no-carve` writes every leaf card.
+    // The tree was carved by the photo: said, with the photo-view IoU before and after, and
+    // the carving made it no worse. `--no-carve` writes every leaf card and stem.
     let line = out
         .lines()
-        .find(|l| l.starts_with("leaves carved by the photo: "))
+        .find(|l| l.starts_with("carved by the photo: "))
         .unwrap_or_else(|| panic!("no carving said: {out}"));
     let ious: Vec<f64> = line
         .split("photo's size ")
@@ -124,7 +124,7 @@ fn photo_to_glb_with_its_camera() {
     assert!(ious.len() == 2 && ious[1] >= ious[0], "{line}");
     let whole = scratch("tree-whole.glb");
     let (out, _) = fit(&whole, &["--no-carve"]);
-    assert!(!out.contains("leaves carved"), "{out}");
+    assert!(!out.contains("carved by the photo"), "{out}");
     let triangles = |p: &PathBuf| {
         procfit::glb::import_glb(&std::fs::read(p).expect("glb"))
             .expect("imports")

@@ -50,7 +50,7 @@ export class Editor extends EventTarget {
     this.useColors = true;
     /** A tree fit's carving of the leaves by its photo (the worker's id), or null. */
     this.carveId = null;
-    /** Whether the leaves are carved (the "Leaves carved by the photo" toggle). */
+    /** Whether the leaves are carved (the "Carved by the photo" toggle). */
     this.useCarve = true;
   }
 

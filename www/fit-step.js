@@ -96,7 +96,7 @@ export function showMatch(r) {
   const each = ious.map((v, i) => `${ious.length > 1 ? `photo ${i + 1} ` : ''}${v.toFixed(2)}`).join(', ');
   const level = typeof r.match_level === 'number' ? r.match_level.toFixed(2) : '';
   // A tree's leaves are then carved where the photo sees through its crown: its overlap as shown.
-  const carved = typeof r.carved_photo_iou === 'number' ? ` With its leaves carved by the photo, pixel by pixel: ${r.carved_photo_iou.toFixed(2)}.` : '';
+  const carved = typeof r.carved_photo_iou === 'number' ? ` Carved by the photo, pixel by pixel: ${r.carved_photo_iou.toFixed(2)}.` : '';
   const numbers = `How well the fitted model matches ${ious.length > 1 ? 'each photo' : 'the photo'} (outline overlap, 1 = exact): ${each}.${carved}`;
   if (r.match_warning) {
     const why = r.match_warning.charAt(0).toUpperCase() + r.match_warning.slice(1);

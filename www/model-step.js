@@ -151,7 +151,7 @@ export function setUpModelStep() {
       editor.carveId = null;
       showPhotoColors();
     }
-    const carved = d.carved ? ' · leaves carved by the photo' : '';
+    const carved = d.carved ? ' · carved by the photo' : '';
     $('viewer-info').textContent = `${d.parts.length} part${d.parts.length === 1 ? '' : 's'} · ${d.triangles.toLocaleString('en')} triangles · ${(d.bytes / 1024).toFixed(0)} KB${latency}${carved}`;
     renderLegend();
     updateButtons();

@@ -36,8 +36,8 @@
 //! //                          photo_ious: [the photo-view IoU], match_level, match_warning
 //! //                          (a sentence when below the level, else undefined),
 //! //                          carved_photo_iou: the photo-view IoU at the photo's size of the
-//! //                          tree as shown, HIGH with its leaves carved }
-//! // The photo that carves the tree's leaves where it sees through the crown: kept by the
+//! //                          tree as shown, HIGH, carved }
+//! // The photo that carves the tree where it sees through it: kept by the
 //! // worker and passed to generateCarvedGlb / exportCarvedFiles (generateGlb's and
 //! // exportFiles' arguments, then it) while the page shows this fit's tree, edited or not.
 //! const carve = fit.carve(); // a TreeCarve; carve.free() when done with it
@@ -64,11 +64,11 @@ pub struct TreeFitSession {
     framing: Framing,
     seed: u32,
     preview: Option<LabelImage>,
-    /// The photo's labels the fit uses, at the photo's size: what carves the result's leaves.
+    /// The photo's labels the fit uses, at the photo's size: what carves the result.
     labels: LabelImage,
 }
 
-/// A fitted tree's photo that carves its leaves ([`crate::tree::carve::LeafCarve`]): made by
+/// A fitted tree's photo that carves it ([`crate::tree::carve::LeafCarve`]): made by
 /// [`TreeFitSession::carve`], passed to `generateCarvedGlb` and `exportCarvedFiles` while the
 /// page shows that fit's tree (the parameters may have been edited since).
 #[wasm_bindgen]
@@ -102,7 +102,7 @@ struct ResultOut {
     /// The level below which the tree is said not to match (`eval::TREE_MATCH_LEVEL`).
     match_level: f64,
     /// The photo-view IoU at the photo's size of the tree as the page shows it (HIGH, its
-    /// leaves carved by the photo, `carve`).
+    /// carved by the photo, `carve`).
     carved_photo_iou: f64,
     /// What is wrong and what to try when below the level (`None` otherwise).
     match_warning: Option<String>,

@@ -168,13 +168,13 @@ test('the fitted tree\'s leaves are carved by its photo, and the toggle shows th
   // On by default after a fit: the view, the download and the match message say so.
   assert.equal(await page.isVisible('#carve-leaves'), true, 'no carving toggle after a tree fit');
   assert.equal(await page.isChecked('#carve-leaves'), true);
-  assert.match(await page.textContent('#viewer-info'), /leaves carved by the photo/);
-  assert.match(await messageOf('fit-match'), /With its leaves carved by the photo, pixel by pixel: [01]\.\d\d\./);
+  assert.match(await page.textContent('#viewer-info'), /carved by the photo/);
+  assert.match(await messageOf('fit-match'), /Carved by the photo, pixel by pixel: [01]\.\d\d\./);
   const triangles = async () => Number((await page.textContent('#viewer-info')).match(/([\d,]+) triangles/)[1].replace(/,/g, ''));
   const carved = await triangles();
   await page.uncheck('#carve-leaves');
   await settled();
-  assert.doesNotMatch(await page.textContent('#viewer-info'), /leaves carved/);
+  assert.doesNotMatch(await page.textContent('#viewer-info'), /carved by the photo/);
   const whole = await triangles();
   assert.notEqual(carved, whole, 'carving changed no triangle');
   await page.check('#carve-leaves');
