@@ -2,7 +2,8 @@
 //! tall narrow aspen), rendered for this test by `scripts/make-tree-bench.mjs` (node, the npm
 //! packages `npm ci` installs, Debian's Chromium; about 10 s), fitted from their colour photos
 //! at a photo fit's default budget (`PHOTO_GA_BUDGET`, a quarter of the GA's 4 608), must beat
-//! the sphere baseline's IoU-64 by [`MARGIN`]. Measured (`cargo bench --bench tree_bench --
+//! the sphere baseline's IoU-64 by [`MARGIN`], and, carved by their photos, reach a photo-view
+//! IoU of [`PHOTO_VIEW_LEVEL`]. Measured (`cargo bench --bench tree_bench --
 //! ash-medium aspen-large`): see ARCHITECTURE.md's tree benchmark numbers.
 
 use procfit::tree::bench::{BenchCase, fit_case, sphere};
@@ -14,6 +15,11 @@ use std::process::Command;
 /// How much better than a sphere (IoU-64) each fitted tree must be (0.03 before the envelope
 /// seeds and the area framing).
 const MARGIN: f64 = 0.05;
+
+/// The photo-view IoU each fitted tree, carved by its photo as the CLI writes it, must reach
+/// (seed 1: ash-medium 0.860, aspen-large 0.884; only the leaves carved, at stop 30, 0.674 and
+/// 0.730).
+const PHOTO_VIEW_LEVEL: f64 = 0.80;
 
 #[test]
 fn fits_beat_the_sphere_on_independent_trees() {
@@ -44,6 +50,11 @@ fn fits_beat_the_sphere_on_independent_trees() {
             score.iou64 >= sph + MARGIN,
             "{name}: IoU-64 {:.3}, the sphere's {sph:.3}",
             score.iou64
+        );
+        assert!(
+            score.photo_iou >= PHOTO_VIEW_LEVEL,
+            "{name}: photo-view IoU {:.3} of the carved tree",
+            score.photo_iou
         );
     }
     let _ = std::fs::remove_dir_all(&out);
