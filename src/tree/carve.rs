@@ -45,13 +45,9 @@ pub fn carve_leaves(
     labels: &LabelImage,
     grid: usize,
 ) -> Result<(Mesh, Carving), TreeError> {
-    check_size(labels, view)?;
-    check_grid(grid)?;
-    let h = labels.height() as usize;
+    let tile = tile_size(labels, view, grid)?;
     let leaf_tris = leaf_triangles(mesh)?;
     let proj = view.projector();
-    // Tiles about TILE_SHARE of the image on screen.
-    let tile = (TILE_SHARE * h as f64).max(MIN_TILE);
     let tree_at = |p: Vec3| photo_keeps(&proj, labels, p);
     let mut drop = vec![false; mesh.triangles.len()];
     // The kept quads, each with its card's normal.
@@ -175,11 +171,8 @@ pub fn carve_stems(
     labels: &LabelImage,
     grid: usize,
 ) -> Result<(Mesh, usize), TreeError> {
-    check_size(labels, view)?;
-    check_grid(grid)?;
-    let h = labels.height() as usize;
+    let tile = tile_size(labels, view, grid)?;
     let proj = view.projector();
-    let tile = (TILE_SHARE * h as f64).max(MIN_TILE);
     let tree_at = |p: Vec3| photo_keeps(&proj, labels, p);
     let mut drop = vec![false; mesh.triangles.len()];
     // Kept pieces: corners (position, normal, uv) and the part.
@@ -441,6 +434,14 @@ fn photo_keeps(proj: &Projector, labels: &LabelImage, p: Vec3) -> bool {
         return true;
     }
     labels.labels()[y as usize * w + x as usize] != BACKGROUND
+}
+
+/// The carving tile's side on screen in pixels (about [`TILE_SHARE`] of the image height, at
+/// least [`MIN_TILE`]), after checking the labels against the view and the grid.
+fn tile_size(labels: &LabelImage, view: &View, grid: usize) -> Result<f64, TreeError> {
+    check_size(labels, view)?;
+    check_grid(grid)?;
+    Ok((TILE_SHARE * f64::from(labels.height())).max(MIN_TILE))
 }
 
 /// The photo's labels must be its view's size.
