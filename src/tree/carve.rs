@@ -78,16 +78,7 @@ pub fn carve_leaves(
             let (p1, u1) = lerp(3, 2, s);
             (p0.lerp(p1, r), u0.lerp(u1, r))
         };
-        // Tiles a side: a tile about `tile` pixels on screen, at most `grid`.
-        let px: Vec<DVec2> = q.iter().map(|c| proj.project(c.0).0).collect();
-        let side = (0..4)
-            .map(|k| (px[k] - px[(k + 1) % 4]).length())
-            .fold(0.0f64, f64::max);
-        let grid = if side.is_finite() {
-            ((side / tile).ceil() as usize).clamp(1, grid)
-        } else {
-            grid
-        };
+        let grid = tiles_a_side(&proj, &q.map(|c| c.0), tile, grid);
         carving.tiles += grid * grid;
         let g = grid as f32;
         // Which tiles the photo keeps, row by row (r), then each row's runs of kept tiles as
@@ -190,15 +181,7 @@ pub fn carve_stems(
             )
         };
         let c = [corner(0), corner(1), corner(2)];
-        let px: Vec<DVec2> = c.iter().map(|q| proj.project(q.0).0).collect();
-        let side = (0..3)
-            .map(|k| (px[k] - px[(k + 1) % 3]).length())
-            .fold(0.0f64, f64::max);
-        let n = if side.is_finite() {
-            ((side / tile).ceil() as usize).clamp(1, grid)
-        } else {
-            grid
-        };
+        let n = tiles_a_side(&proj, &c.map(|q| q.0), tile, grid);
         let nf = n as f32;
         // The point at barycentric grid (i, j): a + i/n (b − a) + j/n (c − a).
         let at = |i: usize, j: usize| {
@@ -444,6 +427,20 @@ fn tile_size(labels: &LabelImage, view: &View, grid: usize) -> Result<f64, TreeE
     Ok((TILE_SHARE * f64::from(labels.height())).max(MIN_TILE))
 }
 
+/// Tiles a side for a polygon with `corners` seen through `proj`: its longest edge on screen
+/// over `tile` pixels, within 1–`grid` (`grid` when it does not project).
+fn tiles_a_side(proj: &Projector, corners: &[Vec3], tile: f64, grid: usize) -> usize {
+    let px: Vec<DVec2> = corners.iter().map(|&c| proj.project(c).0).collect();
+    let side = (0..px.len())
+        .map(|k| (px[k] - px[(k + 1) % px.len()]).length())
+        .fold(0.0f64, f64::max);
+    if side.is_finite() {
+        ((side / tile).ceil() as usize).clamp(1, grid)
+    } else {
+        grid
+    }
+}
+
 /// The photo's labels must be its view's size.
 fn check_size(labels: &LabelImage, view: &View) -> Result<(), TreeError> {
     if (labels.width(), labels.height()) != (view.width, view.height) {
@@ -590,16 +587,22 @@ mod tests {
         m.tri_parts.iter().filter(|&&p| p == part).count()
     }
 
-    fn leaves_only(m: &Mesh) -> Mesh {
+    /// `m` with only the triangles whose part `keep` accepts (coverage only: the per-corner
+    /// lists are left as they are).
+    fn parts_only(m: &Mesh, keep: impl Fn(u8) -> bool) -> Mesh {
         let mut out = m.clone();
         out.triangles = m
             .triangles
             .iter()
             .zip(&m.tri_parts)
-            .filter(|(_, p)| **p == PART_LEAF)
+            .filter(|(_, p)| keep(**p))
             .map(|(t, _)| *t)
             .collect();
         out
+    }
+
+    fn leaves_only(m: &Mesh) -> Mesh {
+        parts_only(m, |p| p == PART_LEAF)
     }
 
     #[test]
@@ -675,15 +678,7 @@ mod tests {
     }
 
     fn stems_only(m: &Mesh) -> Mesh {
-        let mut out = m.clone();
-        out.triangles = m
-            .triangles
-            .iter()
-            .zip(&m.tri_parts)
-            .filter(|(_, p)| **p != PART_LEAF)
-            .map(|(t, _)| *t)
-            .collect();
-        out
+        parts_only(m, |p| p != PART_LEAF)
     }
 
     #[test]
