@@ -36,9 +36,9 @@ pub struct Carving {
 /// coordinates split with them, so a leaf texture stays whole), and a tile is kept when its
 /// centre lands on a tree pixel (branch, leaf or don't-care; off the image counts as tree, the
 /// photo says nothing there); `n` is what makes a tile about [`TILE_SHARE`] of the image
-/// height on screen (at least [`MIN_TILE`] pixels), at most `grid`. Trunk and branches are left to
-/// [`carve_stems`]. Errors when the labels
-/// are not the view's size, `grid` is not within 1–[`CARVE_GRID`], or the leaf triangles are not whole cards.
+/// height on screen (at least [`MIN_TILE`] pixels), at most `grid`. Trunk and branches are
+/// left to [`carve_stems`]. Errors when the labels are not the view's size, `grid` is not
+/// within 1–[`CARVE_GRID`], or the leaf triangles are not whole cards.
 pub fn carve_leaves(
     mesh: &Mesh,
     view: &View,
@@ -88,25 +88,13 @@ pub fn carve_leaves(
         let mut open: Vec<(usize, usize, usize)> = Vec::new();
         let mut rects: Vec<(usize, usize, usize, usize)> = Vec::new();
         for j in 0..=grid {
-            let mut runs: Vec<(usize, usize)> = Vec::new();
-            if j < grid {
-                let mut start = None;
-                for i in 0..=grid {
-                    let on = i < grid && {
-                        let c = at((i as f32 + 0.5) / g, (j as f32 + 0.5) / g).0;
-                        tree_at(c)
-                    };
-                    kept += usize::from(on);
-                    match (on, start) {
-                        (true, None) => start = Some(i),
-                        (false, Some(s0)) => {
-                            runs.push((s0, i));
-                            start = None;
-                        }
-                        _ => {}
-                    }
-                }
-            }
+            let runs = if j < grid {
+                kept_runs(grid, &mut kept, |i| {
+                    tree_at(at((i as f32 + 0.5) / g, (j as f32 + 0.5) / g).0)
+                })
+            } else {
+                Vec::new()
+            };
             let mut still = Vec::new();
             for &(i0, i1, j0) in &open {
                 if runs.contains(&(i0, i1)) {
@@ -205,30 +193,22 @@ pub fn carve_stems(
             };
             c[0].0 * (1.0 - u - v) + c[1].0 * u + c[2].0 * v
         };
-        let mut runs: Vec<(usize, usize, usize)> = Vec::new();
-        let mut all = true;
-        for j in 0..n {
-            let count = 2 * (n - j) - 1;
-            let mut start = None;
-            for k in 0..=count {
-                let on = k < count && tree_at(centre(k, j));
-                all &= on || k == count;
-                match (on, start) {
-                    (true, None) => start = Some(k),
-                    (false, Some(k0)) => {
-                        runs.push((j, k0, k - 1));
-                        start = None;
-                    }
-                    _ => {}
-                }
-            }
-        }
-        if all {
+        // Each row's runs of kept sub-triangles: (row, first, past the last).
+        let mut kept = 0usize;
+        let runs: Vec<(usize, usize, usize)> = (0..n)
+            .flat_map(|j| {
+                kept_runs(2 * (n - j) - 1, &mut kept, |k| tree_at(centre(k, j)))
+                    .into_iter()
+                    .map(move |(k0, k1)| (j, k0, k1))
+            })
+            .collect();
+        if kept == n * n {
             continue;
         }
         drop[t] = true;
         cut += 1;
-        for (j, k0, k1) in runs {
+        for (j, k0, past) in runs {
+            let k1 = past - 1;
             // Bottom corners (row j) and top corners (row j + 1) the run spans.
             let b0 = if k0.is_multiple_of(2) {
                 k0 / 2
@@ -290,8 +270,9 @@ fn push_card(out: &mut Mesh, q: &[(Vec3, Vec2); 4], n: Vec3) {
 /// Adds leaf cards where the photo `labels` (seen through `view`) shows foliage that `mesh`
 /// (a tree generator mesh) leaves uncovered: the image is cut into cells the size of the
 /// mesh's median leaf card on screen, and a cell with at least [`FILL_SHARE`] of uncovered
-/// leaf pixels gets a card facing the camera over them (centred on them), at the median depth of the eight leaf cards
-/// nearest it on screen (so it sits in the crown, not in front of it or behind it). Returns
+/// leaf pixels gets a card facing the camera over them (centred on them), at the median depth
+/// of the eight leaf cards nearest it on screen (so it sits in the crown, not in front of it or
+/// behind it). Returns
 /// the mesh with the cards appended (leaf part, welded corners, both faces) and how many were
 /// added; a mesh without leaf cards is returned as it is.
 pub fn fill_leaves(
@@ -419,6 +400,26 @@ fn photo_keeps(proj: &Projector, labels: &LabelImage, p: Vec3) -> bool {
     labels.labels()[y as usize * w + x as usize] != BACKGROUND
 }
 
+/// The runs of consecutive items `0..len` that `keep` accepts, as (first, past the last),
+/// in order; `kept` counts the accepted items.
+fn kept_runs(len: usize, kept: &mut usize, keep: impl Fn(usize) -> bool) -> Vec<(usize, usize)> {
+    let mut runs = Vec::new();
+    let mut start = None;
+    for i in 0..=len {
+        let on = i < len && keep(i);
+        *kept += usize::from(on);
+        match (on, start) {
+            (true, None) => start = Some(i),
+            (false, Some(s0)) => {
+                runs.push((s0, i));
+                start = None;
+            }
+            _ => {}
+        }
+    }
+    runs
+}
+
 /// The carving tile's side on screen in pixels (about [`TILE_SHARE`] of the image height, at
 /// least [`MIN_TILE`]), after checking the labels against the view and the grid.
 fn tile_size(labels: &LabelImage, view: &View, grid: usize) -> Result<f64, TreeError> {
@@ -443,16 +444,7 @@ fn tiles_a_side(proj: &Projector, corners: &[Vec3], tile: f64, grid: usize) -> u
 
 /// The photo's labels must be its view's size.
 fn check_size(labels: &LabelImage, view: &View) -> Result<(), TreeError> {
-    if (labels.width(), labels.height()) != (view.width, view.height) {
-        return Err(TreeError(format!(
-            "the photo's labels are {}×{}, its view {}×{}",
-            labels.width(),
-            labels.height(),
-            view.width,
-            view.height
-        )));
-    }
-    Ok(())
+    super::check_view_size(labels, view, "the photo's labels are")
 }
 
 /// A carving grid must be within 1–[`CARVE_GRID`].

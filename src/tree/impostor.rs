@@ -565,15 +565,7 @@ impl TreeSession {
         mutation: Option<&MutationStats>,
         start: Option<&[f64]>,
     ) -> Result<TreeSession, TreeError> {
-        if (reference.width(), reference.height()) != (view.width, view.height) {
-            return Err(TreeError(format!(
-                "reference is {}×{}, the view {}×{}",
-                reference.width(),
-                reference.height(),
-                view.width,
-                view.height
-            )));
-        }
+        super::check_view_size(reference, &view, "reference is")?;
         if cfg.use_graph_vertices && traits.graph_vertices.is_none() {
             return Err(TreeError(
                 "weighing in the branch graph needs the reference's vertex count".into(),

@@ -47,6 +47,25 @@ impl From<GenError> for TreeError {
     }
 }
 
+/// An error unless `labels` is `view`'s size, worded "{what} W×H, the view W×H" (`what` names
+/// the labels with its verb: "reference is").
+pub(crate) fn check_view_size(
+    labels: &crate::mask::LabelImage,
+    view: &crate::camera::View,
+    what: &str,
+) -> Result<(), TreeError> {
+    if (labels.width(), labels.height()) != (view.width, view.height) {
+        return Err(TreeError(format!(
+            "{what} {}×{}, the view {}×{}",
+            labels.width(),
+            labels.height(),
+            view.width,
+            view.height
+        )));
+    }
+    Ok(())
+}
+
 /// Maps a genome in `[0, 1]^N` onto a generator's parameter ranges (clamped, whole-number kinds
 /// rounded). Errors on a wrong length or a non-finite gene.
 pub fn genome_to_params(spec: &[ParamSpec], genome: &[f64]) -> Result<Vec<f64>, TreeError> {
