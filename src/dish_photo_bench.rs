@@ -12,7 +12,8 @@
 //!
 //! Each case is fitted as `procfit reconstruct photo.png --generator dish [--fov F]` does:
 //! the photo decoded at the working size, [`segment::segment_auto`], the dish fit at its
-//! default settings ([`FitConfig`]; small extras such as a spoon made don't care). Scores:
+//! default settings ([`FitConfig`]; small extras such as a spoon made don't care; the photo's
+//! brightness for the rim term, [`crate::reconstruct::rim`]). Scores:
 //! - the automatic mask's IoU against the true visible mask (the hard cut, every pixel);
 //! - the paper's IoU-64 against the truth: the fit is moved into the truth's frame through the
 //!   photo's camera ([`to_photo_frame`]: the fitted camera's view of the model is placed in
@@ -27,7 +28,7 @@ use crate::bench_cases::BenchFit;
 use crate::camera::{CameraPose, View, ViewParams};
 use crate::generators::{Generator, Lod, Mesh};
 use crate::mask::Mask;
-use crate::reconstruct::{FitConfig, FitError, FitResult, Session, eval, iou64};
+use crate::reconstruct::{FitConfig, FitError, FitResult, Luma, Session, eval, iou64};
 use crate::segment::{self, Photo};
 use glam::{DVec3, Vec3};
 use serde::Deserialize;
@@ -308,6 +309,8 @@ pub fn fit_case(
     fit: BenchFit,
 ) -> Result<BenchScore, FitError> {
     let seg = auto_segmentation(case)?;
+    let photo = Photo::decode(&case.photo, segment::WORKING_SIDE).map_err(|e| FitError(e.0))?;
+    let luma = Luma::from_rgba(photo.width(), photo.height(), photo.rgba())?;
     if (seg.mask.width(), seg.mask.height()) != (case.mask.width(), case.mask.height()) {
         return Err(FitError(format!(
             "{}: the photo is not at the working size",
@@ -322,6 +325,7 @@ pub fn fit_case(
         quality: fit.quality,
         restarts: fit.runs_for(generator),
         seed: fit.seed,
+        photos: vec![Some(luma)],
         ..FitConfig::default()
     };
     let masks = vec![seg.mask.clone()];

@@ -9,7 +9,7 @@ use procfit::glb::{self, ExportCamera};
 use procfit::mask::Mask;
 use procfit::model::Model;
 use procfit::reconstruct::views::ViewVars;
-use procfit::reconstruct::{self, FitConfig, Session, eval};
+use procfit::reconstruct::{self, FitConfig, Luma, Session, eval};
 use procfit::segment::{self, Photo};
 use procfit::tree::carve::{CARVE_GRID, LeafCarve};
 use std::io::Write;
@@ -396,6 +396,15 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
     let (masks, pixels): (Vec<Mask>, Vec<Option<Vec<u8>>>) =
         views.into_iter().map(|v| (v.mask, v.rgba)).unzip();
     let windows = load_windows(a, &generator, &masks)?;
+    // The photos' brightness, for a rim on the photo's edges (mask images have none).
+    let photos = pixels
+        .iter()
+        .zip(&masks)
+        .map(|(px, m)| {
+            px.as_ref()
+                .and_then(|px| Luma::from_rgba(m.width(), m.height(), px).ok())
+        })
+        .collect();
     let restarts = a
         .restarts
         .unwrap_or_else(|| FitConfig::restarts_for(&generator, a.quality));
@@ -408,6 +417,7 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
         restarts,
         fov_y,
         windows,
+        photos,
         ..FitConfig::default()
     };
     let mut session = Session::new(config, masks.clone()).map_err(|e| e.to_string())?;

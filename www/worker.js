@@ -169,6 +169,17 @@ async function runFit({ fitId, generator, seed = 1, quality = 1, start = [], mas
     at += m.width * m.height;
   }
   const windowFlags = withWindows.length ? Uint8Array.from(views.map((m) => (m.windows ? 1 : 0))) : new Uint8Array(0);
+  // The photos' pixels (one per view, at its mask's size), when sent: the fit reads the rim's
+  // edge in them, and the part colours are measured in them.
+  const withPhotos = views.every((m) => m.rgba && m.rgba.byteLength === 4 * m.width * m.height);
+  const rgba = new Uint8Array(withPhotos ? 4 * total : 0);
+  if (withPhotos) {
+    at = 0;
+    for (const m of views) {
+      rgba.set(new Uint8Array(m.rgba), at);
+      at += 4 * m.width * m.height;
+    }
+  }
   const session = new wasm.FitSession(
     generator,
     seed,
@@ -181,19 +192,9 @@ async function runFit({ fitId, generator, seed = 1, quality = 1, start = [], mas
     Float64Array.from(start),
     windowFlags,
     windowCodes,
+    rgba,
   );
-  // The photos' pixels (one per view, at its mask's size) for the part colours, when sent.
-  const withPhotos = views.every((m) => m.rgba && m.rgba.byteLength === 4 * m.width * m.height);
-  const colorsOf = () => {
-    if (!withPhotos) return null;
-    const rgba = new Uint8Array(4 * total);
-    let at = 0;
-    for (const m of views) {
-      rgba.set(new Uint8Array(m.rgba), at);
-      at += 4 * m.width * m.height;
-    }
-    return session.partColors(rgba);
-  };
+  const colorsOf = () => (withPhotos ? session.partColors(rgba) : null);
   return stepFit(fitId, session, emit, (due) => {
     // The silhouette preview of the best model so far (0..255 coverage), with each progress.
     const w = due ? session.previewWidth() : 0;

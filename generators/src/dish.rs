@@ -906,6 +906,16 @@ impl Generator for Dish {
         (out, P_HAS_SAUCER..N_PARAMS)
     }
 
+    /// The top of the rounded rim: the body's first lathe (welded rings of `12·q` vertices
+    /// after the bottom pole), profile point `20·q` (see `build`: `q` bottom points, `2·q` in
+    /// the corner, `16·q + 1` on the wall, the top of the half circle `q` further on).
+    fn rim(&self, _params: &[f64], lod: Lod) -> Vec<u32> {
+        let q = lod_q(lod);
+        let (n, top) = (12 * q, 20 * q);
+        let first = 1 + (top - 1) * n;
+        (first..first + n).map(|i| i as u32).collect()
+    }
+
     fn differentiable(&self) -> bool {
         true
     }

@@ -415,6 +415,14 @@ pub trait Generator: Send + Sync {
         let _ = (params, lod);
         Err(GenError::NotDifferentiable(self.name()))
     }
+    /// The vertices of `params`' mesh at `lod`, in order around it, of a closed ring that a
+    /// photo from above shows as an edge inside the silhouette: a dish's rim, where the inside
+    /// meets the outside. A fit reads the photo's edges along the ring's near half (the far half
+    /// is on the outline), which fixes how high the camera is where the outline alone cannot.
+    /// Empty (the default) when the model has no such ring.
+    fn rim(&self, _params: &[f64], _lod: Lod) -> Vec<u32> {
+        Vec::new()
+    }
     /// How unlike a real object `params` look, for breaking ties between fits whose silhouettes
     /// match alike (one photo often cannot tell two shapes apart: a mug's handle turned towards
     /// the camera and a shorter one seen side-on). Never part of the loss: among restarts whose

@@ -63,6 +63,75 @@ fn random_in_range_parameters_give_valid_meshes() {
     }
 }
 
+/// `Dish::rim` is the body's top ring: consecutive vertices at one height, the highest of the
+/// body, on a circle around the axis, going once around it; for every preset and level, and for
+/// random dishes.
+#[test]
+fn the_rim_is_the_top_ring_of_the_body() {
+    let mut rng = Rng::new(7);
+    let mut cases: Vec<(String, Vec<f64>, Lod)> = Vec::new();
+    for preset in Dish.presets() {
+        for lod in Lod::ALL {
+            cases.push((preset.name.to_string(), preset.values.clone(), lod));
+        }
+    }
+    for k in 0..40 {
+        cases.push((
+            format!("random {k}"),
+            random_params(&Dish, &mut rng),
+            Lod::Low,
+        ));
+    }
+    for (what, p, lod) in cases {
+        let m = Dish.generate(&p, lod).expect("generate");
+        let rim = Dish.rim(&p, lod);
+        assert_eq!(rim.len(), 12 << lod.index(), "{what} {lod:?}");
+        // The body is part 0: the highest of its vertices.
+        let mut body = vec![false; m.positions.len()];
+        for (t, tri) in m.triangles.iter().enumerate() {
+            if m.tri_parts[t] == 0 {
+                for &v in tri {
+                    body[v as usize] = true;
+                }
+            }
+        }
+        let top = (0..m.positions.len())
+            .filter(|&i| body[i])
+            .map(|i| m.positions[i].y)
+            .fold(f32::MIN, f32::max);
+        let radius = |i: u32| m.positions[i as usize].x.hypot(m.positions[i as usize].z);
+        let r0 = radius(rim[0]);
+        let mut turn = 0.0f32;
+        for (k, &i) in rim.iter().enumerate() {
+            assert!(
+                body[i as usize],
+                "{what} {lod:?}: rim vertex {i} is not the body's"
+            );
+            let p = m.positions[i as usize];
+            // The half circle's middle; a flared wall (a plate's is almost flat) tilts the
+            // lip, so the highest point may lie beside it, on the lip all the same.
+            let tol = 0.5 * dish::WALL as f32;
+            assert!(
+                (p.y - top).abs() < tol,
+                "{what} {lod:?}: rim at {} below the top {top}",
+                p.y
+            );
+            assert!(
+                (radius(i) - r0).abs() < 1e-5 * r0.max(1.0),
+                "{what} {lod:?}: not a circle"
+            );
+            let q = m.positions[rim[(k + 1) % rim.len()] as usize];
+            let d = q.z.atan2(q.x) - p.z.atan2(p.x);
+            turn +=
+                (d + std::f32::consts::PI).rem_euclid(std::f32::consts::TAU) - std::f32::consts::PI;
+        }
+        assert!(
+            (turn.abs() - std::f32::consts::TAU).abs() < 1e-3,
+            "{what} {lod:?}: turns {turn}"
+        );
+    }
+}
+
 /// Vertex count, triangle count and bounding box (min, max) of a preset at a level.
 fn check(preset: &str, lod: Lod, verts: usize, tris: usize, lo: [f32; 3], hi: [f32; 3]) {
     check_summary(&Dish, preset, lod, 1e-4, verts, tris, lo, hi);

@@ -4,6 +4,7 @@
 //! `Plan`.
 
 use super::FitError;
+use super::rim::{DEFAULT_RIM_WEIGHT, Luma};
 use super::views::{DEFAULT_FOV_Y, MaskStats, mask_stats};
 use super::windows::{DEFAULT_WINDOW_WEIGHT, WindowTerm};
 use crate::generators::{self, Generator, Lod};
@@ -77,6 +78,12 @@ pub struct FitConfig {
     pub windows: Vec<Option<LabelImage>>,
     /// Weight of the window term relative to the silhouette MSE.
     pub window_weight: f64,
+    /// The photo of each view, as brightness at its mask's size ([`super::rim`]): missing or
+    /// `None` entries (a mask image) have none. A generator with a rim ([`Generator::rim`])
+    /// lays its rim on the photo's edges.
+    pub photos: Vec<Option<Luma>>,
+    /// Weight of the rim term relative to the silhouette MSE (0: off).
+    pub rim_weight: f64,
     /// Whether small things in a mask that are not the object (a spoon, a tea bag's string
     /// and tag: thin spurs and small separate pieces, [`super::extras`]) are made don't care
     /// before the fit. On by default.
@@ -103,6 +110,8 @@ impl Default for FitConfig {
             start: None,
             windows: Vec::new(),
             window_weight: DEFAULT_WINDOW_WEIGHT,
+            photos: Vec::new(),
+            rim_weight: DEFAULT_RIM_WEIGHT,
             ignore_extras: true,
         }
     }
@@ -195,6 +204,28 @@ impl FitConfig {
         }
         if config.resolutions.iter().any(|&r| !(8..=4096).contains(&r)) {
             return Err(FitError("stage resolutions must be within 8..=4096".into()));
+        }
+        if !(config.rim_weight.is_finite() && config.rim_weight >= 0.0) {
+            return Err(FitError("the rim weight must be ≥ 0".into()));
+        }
+        if config.photos.len() > masks.len() {
+            return Err(FitError(format!(
+                "{} photos for {} views",
+                config.photos.len(),
+                masks.len()
+            )));
+        }
+        for (i, p) in config.photos.iter().enumerate() {
+            if let Some(p) = p
+                && (p.width(), p.height()) != (w0, h0)
+            {
+                return Err(FitError(format!(
+                    "photo {} is {}×{}, its mask {w0}×{h0}",
+                    i + 1,
+                    p.width(),
+                    p.height()
+                )));
+            }
         }
         let windows =
             WindowTerm::new(&config.windows, masks.len(), (w0, h0), config.window_weight)?

@@ -11,6 +11,8 @@
 //!   run's stage machine), `seeds` (stage 1's seed points), `handover` (stage 1 → 2).
 //! - [`windows`]: the window term of a building fit (window labels per view), and
 //!   `layout_search`, the building layout sweep it drives at the hand-over.
+//! - [`rim`]: the rim term of a dish fit (the photo's edge where the rim's near half lies,
+//!   which fixes the camera's height from above).
 //! - [`eval`]: the paper's IoU over 64 turntable views.
 //! - [`extras`]: small things in a mask that are not the object (a spoon, a tea bag's tag),
 //!   made don't care before the fit ([`FitConfig::ignore_extras`]).
@@ -21,6 +23,7 @@ pub mod extras;
 mod handover;
 mod layout_search;
 pub mod objective;
+pub mod rim;
 mod run;
 mod seeds;
 pub mod session;
@@ -33,6 +36,7 @@ pub use config::{
 };
 pub use eval::{align_to_reference, iou64, normalized};
 pub use objective::{FitObjective, Layout, render_coverage, resample_mask};
+pub use rim::{DEFAULT_RIM_WEIGHT, Luma, RimTerm};
 pub use session::{FitResult, PREVIEW_SIDE, Progress, Session};
 pub use views::{CAMERA_DISTANCE, DEFAULT_FOV_Y, ViewSlot, ViewVars, fov_from_focal_35mm};
 pub use windows::{DEFAULT_WINDOW_WEIGHT, WindowTerm};

@@ -17,6 +17,7 @@
 //! its own. Edge structures ([`Topology`]) depend only on the discrete parameters and the level
 //! of detail, so they are cached per combination, shared between threads.
 
+use super::rim::RimTerm;
 use super::views::{ViewSlot, ViewVars};
 use super::windows::WindowTerm;
 use crate::camera::{N_VIEW_PARAMS, View};
@@ -168,6 +169,7 @@ pub struct FitObjective {
     parallel_render: bool,
     topologies: TopologyCache,
     windows: Option<Arc<WindowTerm>>,
+    rim: Option<Arc<RimTerm>>,
 }
 
 impl FitObjective {
@@ -191,12 +193,19 @@ impl FitObjective {
             parallel_render,
             topologies: TopologyCache::default(),
             windows: None,
+            rim: None,
         }
     }
 
     /// Adds the window term ([`super::windows`]): its value counts, its gradient is zero.
     pub fn with_windows(mut self, windows: Option<Arc<WindowTerm>>) -> FitObjective {
         self.windows = windows;
+        self
+    }
+
+    /// Adds the rim term ([`super::rim`]), built for this objective's masks.
+    pub fn with_rim(mut self, rim: Option<Arc<RimTerm>>) -> FitObjective {
+        self.rim = rim;
         self
     }
 
@@ -284,6 +293,16 @@ impl FitObjective {
                 loss += eq1
                     .value(topo, &mesh.positions, &scratch.views, &self.masks)
                     .map_err(|e| e.to_string())?;
+                if let Some(term) = &self.rim {
+                    loss += term.evaluate(
+                        self.generator,
+                        gen_x,
+                        self.lod,
+                        &mesh.positions,
+                        &scratch.views,
+                        None,
+                    );
+                }
                 return Ok(());
             };
             scratch.grad_pos.clear();
@@ -301,6 +320,16 @@ impl FitObjective {
                     &mut scratch.grad_views,
                 )
                 .map_err(|e| e.to_string())?;
+            if let Some(term) = &self.rim {
+                loss += term.evaluate(
+                    self.generator,
+                    gen_x,
+                    self.lod,
+                    &mesh.positions,
+                    &scratch.views,
+                    Some((&mut scratch.grad_pos, &mut scratch.grad_views)),
+                );
+            }
             g.fill(0.0);
             for (v, (gv, view)) in scratch.grad_views.iter().zip(&scratch.views).enumerate() {
                 pull_back_view(layout, x, v, gv, view.params.scale, g);

@@ -7,6 +7,7 @@ use super::config::{FitConfig, Plan};
 use super::handover::{PROBES, probe, probe_starts};
 use super::layout_search::{SWEEP_WORK, window_sweep};
 use super::objective::{FitObjective, Layout, render_coverage, resample_mask};
+use super::rim::RimTerm;
 use super::seeds::{SINGLE_VIEW_POPULATION, start_points};
 use super::session::{FitResult, PREVIEW_SIDE, Progress};
 use super::windows::WindowTerm;
@@ -136,7 +137,8 @@ impl Run {
                 config.search_reg_weight,
                 false,
             )
-            .with_windows(windows.clone());
+            .with_windows(windows.clone())
+            .with_rim(RimTerm::new(&config.photos, &small, config.rim_weight).map(Arc::new));
             let memetic = Memetic::new(
                 domain,
                 &seeds,
@@ -299,11 +301,12 @@ impl Run {
         let i = usize::from(stage - 1);
         let lod = self.config.lods[i];
         let lr = if stage == 2 { 0.01 } else { 0.0075 };
-        let masks = self
+        let masks: Vec<Mask> = self
             .masks
             .iter()
             .map(|m| resample_mask(m, self.config.resolutions[i]))
             .collect();
+        let rim = RimTerm::new(&self.config.photos, &masks, self.config.rim_weight).map(Arc::new);
         let objective = FitObjective::new(
             g,
             lod,
@@ -312,7 +315,8 @@ impl Run {
             self.config.reg_weight,
             true,
         )
-        .with_windows(self.windows.clone());
+        .with_windows(self.windows.clone())
+        .with_rim(rim);
         let domain = search.memetic.domain().clone();
         let adam = Adam::new(
             &domain,

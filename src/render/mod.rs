@@ -52,7 +52,7 @@ pub use labels::LabelRenderer;
 pub use multiview::MultiViewLoss;
 
 use crate::camera::{N_VIEW_PARAMS, View};
-use glam::{DVec2, DVec3, Vec3};
+use glam::{DMat3, DVec2, DVec3, Vec3};
 use rayon::prelude::*;
 use std::fmt;
 
@@ -609,43 +609,76 @@ impl Renderer {
         grad_pos: &mut [Vec3],
         grad_view: &mut [f64; N_VIEW_PARAMS],
     ) {
-        let [r, dr_yaw, dr_pitch, dr_roll] = view.params.rotation_and_derivatives();
-        let s = view.params.scale;
-        let rc = view.pose.rotation;
-        let f = view.focal();
-        let h = f64::from(self.height);
-        let half = 0.5 * view.params.fov_y;
-        let df_dfov = -h / (4.0 * half.sin() * half.sin());
+        let chain = ScreenChain::new(view);
         let mut acc = [0.0f64; N_VIEW_PARAMS];
         for (i, &g) in self.grad_screen.iter().enumerate() {
             if g == DVec2::ZERO {
                 continue;
             }
-            let c = self.cam[i];
-            let z = -c.z;
-            // x = cx + f·c.x/z, y = cy − f·c.y/z with z = −c.z.
-            let dc = DVec3::new(
-                f * g.x / z,
-                -f * g.y / z,
-                f * (g.x * c.x - g.y * c.y) / (z * z),
-            );
-            let dw = rc * dc;
-            let p = positions[i].as_dvec3();
-            grad_pos[i] += (s * (r.transpose() * dw)).as_vec3();
-            acc[0] += dw.dot(s * (dr_yaw * p));
-            acc[1] += dw.dot(s * (dr_pitch * p));
-            acc[2] += dw.dot(s * (dr_roll * p));
-            acc[3] += dw.x;
-            acc[4] += dw.y;
-            acc[5] += dw.z;
-            acc[6] += dw.dot(r * p);
-            acc[7] += (g.x * c.x / z - g.y * c.y / z) * df_dfov;
-            acc[8] += h * g.x;
-            acc[9] += h * g.y;
+            grad_pos[i] += chain.add(positions[i], self.cam[i], g, &mut acc);
         }
         for (g, a) in grad_view.iter_mut().zip(acc) {
             *g += a;
         }
+    }
+}
+
+/// The chain rule of a [`View`]'s projection: from dL/d(pixel position) of a projected
+/// object-space point to dL/d(that point) and dL/d(view parameters). The renderer's backward
+/// pass and every other image-space term of a fit (the rim's edge) pull back through it.
+pub struct ScreenChain {
+    r: DMat3,
+    dr: [DMat3; 3],
+    s: f64,
+    rc: DMat3,
+    f: f64,
+    h: f64,
+    df_dfov: f64,
+}
+
+impl ScreenChain {
+    /// The chain rule of `view`.
+    pub fn new(view: &View) -> ScreenChain {
+        let [r, dr_yaw, dr_pitch, dr_roll] = view.params.rotation_and_derivatives();
+        let h = f64::from(view.height);
+        let half = 0.5 * view.params.fov_y;
+        ScreenChain {
+            r,
+            dr: [dr_yaw, dr_pitch, dr_roll],
+            s: view.params.scale,
+            rc: view.pose.rotation,
+            f: view.focal(),
+            h,
+            df_dfov: -h / (4.0 * half.sin() * half.sin()),
+        }
+    }
+
+    /// For object-space point `p`, at camera-space `c` (its
+    /// [`Projector::to_camera`](crate::camera::Projector::to_camera)), with dL/d(its pixel
+    /// position) `g`: **adds** dL/d(view parameters) into `acc` (in
+    /// [`ViewParams::NAMES`](crate::camera::ViewParams::NAMES) order) and returns dL/dp.
+    pub fn add(&self, p: Vec3, c: DVec3, g: DVec2, acc: &mut [f64; N_VIEW_PARAMS]) -> Vec3 {
+        let (r, s, f, h) = (self.r, self.s, self.f, self.h);
+        let z = -c.z;
+        // x = cx + f·c.x/z, y = cy − f·c.y/z with z = −c.z.
+        let dc = DVec3::new(
+            f * g.x / z,
+            -f * g.y / z,
+            f * (g.x * c.x - g.y * c.y) / (z * z),
+        );
+        let dw = self.rc * dc;
+        let p = p.as_dvec3();
+        acc[0] += dw.dot(s * (self.dr[0] * p));
+        acc[1] += dw.dot(s * (self.dr[1] * p));
+        acc[2] += dw.dot(s * (self.dr[2] * p));
+        acc[3] += dw.x;
+        acc[4] += dw.y;
+        acc[5] += dw.z;
+        acc[6] += dw.dot(r * p);
+        acc[7] += (g.x * c.x / z - g.y * c.y / z) * self.df_dfov;
+        acc[8] += h * g.x;
+        acc[9] += h * g.y;
+        (s * (r.transpose() * dw)).as_vec3()
     }
 }
 

@@ -5,7 +5,7 @@
 
 use super::js;
 use crate::mask::{LabelImage, Mask};
-use crate::reconstruct::{FitConfig, Session, eval, export_camera};
+use crate::reconstruct::{FitConfig, Luma, Session, eval, export_camera};
 use wasm_bindgen::prelude::*;
 
 /// A fit in progress.
@@ -146,6 +146,36 @@ fn windows_of(
     Ok(out)
 }
 
+/// The photos' brightness per view from their RGBA pixels (`widths[i] × heights[i]` each,
+/// concatenated); empty `rgba`: no photos.
+fn photos_of(widths: &[u32], heights: &[u32], rgba: &[u8]) -> Result<Vec<Option<Luma>>, JsError> {
+    if rgba.is_empty() {
+        return Ok(Vec::new());
+    }
+    let total: usize = widths
+        .iter()
+        .zip(heights)
+        .map(|(&w, &h)| 4 * w as usize * h as usize)
+        .sum();
+    if rgba.len() != total {
+        return Err(JsError::new(&format!(
+            "{} photo bytes for masks of {total} RGBA bytes",
+            rgba.len()
+        )));
+    }
+    let mut at = 0usize;
+    widths
+        .iter()
+        .zip(heights)
+        .map(|(&w, &h)| {
+            let n = 4 * w as usize * h as usize;
+            let luma = Luma::from_rgba(w, h, &rgba[at..at + n]).map_err(js)?;
+            at += n;
+            Ok(Some(luma))
+        })
+        .collect()
+}
+
 #[wasm_bindgen]
 impl FitSession {
     /// Starts a fit of `generator` (or `auto`) to the masks (see `masks_of`); nothing is
@@ -153,7 +183,9 @@ impl FitSession {
     /// vertical field of view (radians) per mask, 0 where unknown (the default is used), or
     /// empty. `start`: the generator's parameters to start from ("refit from here"; a named
     /// generator only), or empty. `window_flags`/`window_codes`: window labels for the views
-    /// that have them (buildings; see `windows_of`), or both empty.
+    /// that have them (buildings; see `windows_of`), or both empty. `photos`: the photos'
+    /// sRGB RGBA pixels, one per view at its mask's size, concatenated (the rim term of
+    /// `reconstruct::rim` reads their edges), or empty.
     #[wasm_bindgen(constructor)]
     #[allow(
         clippy::too_many_arguments,
@@ -170,6 +202,7 @@ impl FitSession {
         start: &[f64],
         window_flags: &[u8],
         window_codes: &[u8],
+        photos: &[u8],
     ) -> Result<FitSession, JsError> {
         if !fov_y.is_empty() && fov_y.len() != widths.len() {
             return Err(JsError::new(&format!(
@@ -188,6 +221,7 @@ impl FitSession {
             windows: windows_of(widths, heights, window_flags, window_codes)?,
             // The core's policy: a quick preview is one run (quality is checked there too).
             restarts: FitConfig::restarts_for(generator, quality),
+            photos: photos_of(widths, heights, photos)?,
             ..FitConfig::default()
         };
         let masks = masks_of(widths, heights, codes)?;
