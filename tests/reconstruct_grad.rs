@@ -70,18 +70,7 @@ fn objective_gradient_matches_finite_differences() {
             (20, 1e-2),
         ])
         .collect();
-    for (i, h) in checks {
-        let (mut a, mut b) = (p.clone(), p.clone());
-        a[i] += h;
-        b[i] -= h;
-        let fd = (obj.value(&a) - obj.value(&b)) / (2.0 * h);
-        let err = (g[i] - fd).abs();
-        assert!(
-            err <= 0.15 * fd.abs().max(g[i].abs()) + 2e-3,
-            "d/dx[{i}]: analytic {} vs finite difference {fd}",
-            g[i]
-        );
-    }
+    check_finite_differences(|x| obj.value(x), &p, &g, &checks, 0.15);
 }
 
 #[test]
@@ -245,8 +234,8 @@ fn focal_length_from_a_jpeg_file() {
 #[test]
 fn rim_term_prefers_the_true_camera_and_its_gradient_matches_finite_differences() {
     use procfit::camera::View;
+    use procfit::reconstruct::RimTerm;
     use procfit::reconstruct::views::camera_pose;
-    use procfit::reconstruct::{Luma, RimTerm};
 
     let mut rng = Rng::new(5);
     let x = random_dish(&mut rng, false);
@@ -283,32 +272,7 @@ fn rim_term_prefers_the_true_camera_and_its_gradient_matches_finite_differences(
         .iter()
         .map(|&i| tv.project(mesh.positions[i as usize]).0)
         .collect();
-    let inside_rim = |q: glam::DVec2| {
-        let mut odd = false;
-        for k in 0..ring.len() {
-            let (a, b) = (ring[k], ring[(k + 1) % ring.len()]);
-            if (a.y > q.y) != (b.y > q.y) && q.x < a.x + (q.y - a.y) * (b.x - a.x) / (b.y - a.y) {
-                odd = !odd;
-            }
-        }
-        odd
-    };
-    let mut rgba = Vec::with_capacity(4 * (side * side) as usize);
-    for (i, &m) in mask.values().iter().enumerate() {
-        let q = glam::DVec2::new(
-            (i % side as usize) as f64 + 0.5,
-            (i / side as usize) as f64 + 0.5,
-        );
-        let v: u8 = if m < 0.5 {
-            128
-        } else if inside_rim(q) {
-            77
-        } else {
-            204
-        };
-        rgba.extend([v, v, v, 255]);
-    }
-    let luma = Luma::from_rgba(side, side, &rgba).unwrap();
+    let luma = photo_with_dark_rim(&mask, &ring);
     let photos = [Some(luma)];
     let term = RimTerm::new(&photos, std::slice::from_ref(&mask), 1.0).unwrap();
     let value =
@@ -352,22 +316,12 @@ fn rim_term_prefers_the_true_camera_and_its_gradient_matches_finite_differences(
     // samples, follows a point's motion only on average (measured: camera pitch and height
     // within 3–6 %, the rim radius 2 %, the object scale 45 %; the silhouette alone 4–30 %
     // at these steps).
-    for (i, h) in [
+    let checks = [
         (o + 1, 1e-2),
         (o + 4, 1e-2),
         (o + 5, 2e-2),
         (8, 5e-2),
         (9, 3e-2),
-    ] {
-        let (mut a, mut b) = (p.clone(), p.clone());
-        a[i] += h;
-        b[i] -= h;
-        let fd = (obj.value(&a) - obj.value(&b)) / (2.0 * h);
-        let err = (grad[i] - fd).abs();
-        assert!(
-            err <= 0.35 * fd.abs().max(grad[i].abs()) + 2e-3,
-            "d/dx[{i}]: analytic {} vs finite difference {fd}",
-            grad[i]
-        );
-    }
+    ];
+    check_finite_differences(|x| obj.value(x), &p, &grad, &checks, 0.35);
 }

@@ -289,20 +289,24 @@ impl FitObjective {
             scratch.views.clear();
             scratch.views.extend((0..n).map(|v| self.view(x, v)));
             let eq1 = loss_for(&mut scratch.losses, w, h, n, self.parallel_render)?;
-            let Some(g) = grad.as_deref_mut() else {
-                loss += eq1
-                    .value(topo, &mesh.positions, &scratch.views, &self.masks)
-                    .map_err(|e| e.to_string())?;
-                if let Some(term) = &self.rim {
-                    loss += term.evaluate(
+            // The rim term (value, and with the buffers its gradient).
+            let rim = |views: &[View], grads| {
+                self.rim.as_ref().map_or(0.0, |term| {
+                    term.evaluate(
                         self.generator,
                         gen_x,
                         self.lod,
                         &mesh.positions,
-                        &scratch.views,
-                        None,
-                    );
-                }
+                        views,
+                        grads,
+                    )
+                })
+            };
+            let Some(g) = grad.as_deref_mut() else {
+                loss += eq1
+                    .value(topo, &mesh.positions, &scratch.views, &self.masks)
+                    .map_err(|e| e.to_string())?;
+                loss += rim(&scratch.views, None);
                 return Ok(());
             };
             scratch.grad_pos.clear();
@@ -320,16 +324,10 @@ impl FitObjective {
                     &mut scratch.grad_views,
                 )
                 .map_err(|e| e.to_string())?;
-            if let Some(term) = &self.rim {
-                loss += term.evaluate(
-                    self.generator,
-                    gen_x,
-                    self.lod,
-                    &mesh.positions,
-                    &scratch.views,
-                    Some((&mut scratch.grad_pos, &mut scratch.grad_views)),
-                );
-            }
+            loss += rim(
+                &scratch.views,
+                Some((&mut scratch.grad_pos, &mut scratch.grad_views)),
+            );
             g.fill(0.0);
             for (v, (gv, view)) in scratch.grad_views.iter().zip(&scratch.views).enumerate() {
                 pull_back_view(layout, x, v, gv, view.params.scale, g);

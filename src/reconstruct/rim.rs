@@ -35,7 +35,8 @@ use glam::{DVec2, DVec3, Vec3};
 pub const DEFAULT_RIM_WEIGHT: f64 = 1e-3;
 
 /// How far along its normal a rim point looks for the photo's edge, as a share of the image's
-/// longer side (20 pixels at 512).
+/// longer side (20 pixels at 512). Twice as far reaches more of the photo's other edges:
+/// the Mitsuba dish photos' mean IoU-64 0.920 / 0.910 → 0.913 / 0.904 (seeds 0 / 1).
 pub const RANGE_SHARE: f64 = 0.04;
 
 /// The least brightness step a pixel (after a binomial blur) that counts as the rim's edge:

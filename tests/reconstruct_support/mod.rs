@@ -321,3 +321,56 @@ pub fn measured_mug_on_saucer() -> Mesh {
     }
     mesh
 }
+
+/// A synthetic photo of a dish from above for the rim term: background grey, the object
+/// (`mask`) bright, and inside `ring` (the rim projected, in order around it) dark, so the rim
+/// is an edge all round.
+pub fn photo_with_dark_rim(mask: &Mask, ring: &[glam::DVec2]) -> procfit::reconstruct::Luma {
+    let inside_rim = |q: glam::DVec2| {
+        let mut odd = false;
+        for k in 0..ring.len() {
+            let (a, b) = (ring[k], ring[(k + 1) % ring.len()]);
+            if (a.y > q.y) != (b.y > q.y) && q.x < a.x + (q.y - a.y) * (b.x - a.x) / (b.y - a.y) {
+                odd = !odd;
+            }
+        }
+        odd
+    };
+    let w = mask.width() as usize;
+    let mut rgba = Vec::with_capacity(4 * mask.values().len());
+    for (i, &m) in mask.values().iter().enumerate() {
+        let q = glam::DVec2::new((i % w) as f64 + 0.5, (i / w) as f64 + 0.5);
+        let v: u8 = if m < 0.5 {
+            128
+        } else if inside_rim(q) {
+            77
+        } else {
+            204
+        };
+        rgba.extend([v, v, v, 255]);
+    }
+    procfit::reconstruct::Luma::from_rgba(mask.width(), mask.height(), &rgba).unwrap()
+}
+
+/// Checks `grad` (the objective's at `p`) against central finite differences of `value` at
+/// each `(index, step)`: within `rel` of the larger of the two, plus 2e-3.
+pub fn check_finite_differences(
+    value: impl Fn(&[f64]) -> f64,
+    p: &[f64],
+    grad: &[f64],
+    checks: &[(usize, f64)],
+    rel: f64,
+) {
+    for &(i, h) in checks {
+        let (mut a, mut b) = (p.to_vec(), p.to_vec());
+        a[i] += h;
+        b[i] -= h;
+        let fd = (value(&a) - value(&b)) / (2.0 * h);
+        let err = (grad[i] - fd).abs();
+        assert!(
+            err <= rel * fd.abs().max(grad[i].abs()) + 2e-3,
+            "d/dx[{i}]: analytic {} vs finite difference {fd}",
+            grad[i]
+        );
+    }
+}
