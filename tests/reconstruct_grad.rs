@@ -234,8 +234,8 @@ fn focal_length_from_a_jpeg_file() {
 #[test]
 fn rim_term_prefers_the_true_camera_and_its_gradient_matches_finite_differences() {
     use procfit::camera::View;
-    use procfit::reconstruct::RimTerm;
     use procfit::reconstruct::views::camera_pose;
+    use procfit::reconstruct::{Luma, RimTerm};
 
     let mut rng = Rng::new(5);
     let x = random_dish(&mut rng, false);
@@ -273,6 +273,14 @@ fn rim_term_prefers_the_true_camera_and_its_gradient_matches_finite_differences(
         .map(|&i| tv.project(mesh.positions[i as usize]).0)
         .collect();
     let luma = photo_with_dark_rim(&mask, &ring);
+    // A photo with nothing inside the outline (a mask image sent as the photo): no term.
+    let blank: Vec<u8> = mask
+        .values()
+        .iter()
+        .flat_map(|&m| if m < 0.5 { [0, 0, 0, 255] } else { [255; 4] })
+        .collect();
+    let blank = Luma::from_rgba(side, side, &blank).unwrap();
+    assert!(RimTerm::new(&[Some(blank)], std::slice::from_ref(&mask), 1.0).is_none());
     let photos = [Some(luma)];
     let term = RimTerm::new(&photos, std::slice::from_ref(&mask), 1.0).unwrap();
     let value =

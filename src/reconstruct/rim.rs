@@ -19,8 +19,8 @@
 //! [`FitConfig::rim_weight`](super::FitConfig::rim_weight), and its pixel gradients go back
 //! through the projection ([`ScreenChain`]) to the ring's vertices and the view.
 //!
-//! Views given as mask images have no photo and no term; neither has a generator without a
-//! rim.
+//! Views given as mask images have no photo and no term, nor has a photo with no edge inside
+//! the object ([`MIN_EDGE_PIXELS`]), nor a generator without a rim.
 
 use super::FitError;
 use super::objective::resample_mask;
@@ -47,6 +47,10 @@ pub const RANGE_SHARE: f64 = 0.04;
 /// lose to them. Measured on the Mitsuba dish photos (`cargo bench --bench dish_photo_bench`,
 /// seed 0): 0.001 → IoU-64 0.911, 0.02 → 0.920, 0.04 → 0.864.
 pub const MIN_EDGE: f32 = 0.02;
+
+/// Fewer object pixels than this on an edge at least [`MIN_EDGE`] strong, and a view has no
+/// rim term: the photo shows nothing inside the outline.
+pub const MIN_EDGE_PIXELS: usize = 16;
 
 /// The search's step along a rim point's normal, pixels.
 const STEP: f64 = 0.5;
@@ -170,6 +174,11 @@ impl EdgeField {
         let k = strengths.len() * 9 / 10;
         let (_, p90, _) = strengths.select_nth_unstable_by(k, f32::total_cmp);
         let threshold = (0.5 * *p90).max(MIN_EDGE);
+        // No edge inside the object (a mask image sent as the photo, a blank object): no term,
+        // rather than a constant that would only widen the restarts' tie window.
+        if strengths.iter().filter(|&&s| s >= threshold).count() < MIN_EDGE_PIXELS {
+            return None;
+        }
         Some(EdgeField {
             w,
             h,
