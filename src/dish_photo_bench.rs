@@ -294,9 +294,12 @@ pub fn rim_aspect(positions: &[Vec3]) -> f64 {
 /// The automatic segmentation of the case's photo, as the CLI makes it (decoded at the
 /// working size, [`segment::segment_auto`]).
 pub fn auto_segmentation(case: &BenchCase) -> Result<segment::Segmentation, FitError> {
-    let e = |x: segment::SegmentError| FitError(x.0);
-    let photo = Photo::decode(&case.photo, segment::WORKING_SIDE).map_err(e)?;
-    segment::segment_auto(&photo).map_err(e)
+    segment::segment_auto(&decoded(case)?).map_err(|x| FitError(x.0))
+}
+
+/// The case's photo decoded at the working size, as the CLI decodes it.
+fn decoded(case: &BenchCase) -> Result<Photo, FitError> {
+    Photo::decode(&case.photo, segment::WORKING_SIDE).map_err(|x| FitError(x.0))
 }
 
 /// Fits the case's photo as the CLI does (segmented automatically, the dish generator at the
@@ -308,8 +311,9 @@ pub fn fit_case(
     fov_y: Option<f64>,
     fit: BenchFit,
 ) -> Result<BenchScore, FitError> {
-    let seg = auto_segmentation(case)?;
-    let photo = Photo::decode(&case.photo, segment::WORKING_SIDE).map_err(|e| FitError(e.0))?;
+    // Decoded once: segmented, and its brightness for the rim term.
+    let photo = decoded(case)?;
+    let seg = segment::segment_auto(&photo).map_err(|x| FitError(x.0))?;
     let luma = Luma::from_rgba(photo.width(), photo.height(), photo.rgba())?;
     if (seg.mask.width(), seg.mask.height()) != (case.mask.width(), case.mask.height()) {
         return Err(FitError(format!(

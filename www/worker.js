@@ -153,33 +153,26 @@ const PROGRESS_MS = 100;
 
 async function runFit({ fitId, generator, seed = 1, quality = 1, start = [], masks: views }, emit) {
   if (!views?.length) throw new Error('no masks to fit: add a photo first');
-  const total = views.reduce((n, m) => n + m.width * m.height, 0);
-  const codes = new Uint8Array(total);
-  let at = 0;
-  for (const m of views) {
-    codes.set(new Uint8Array(m.codes), at);
-    at += m.width * m.height;
-  }
+  // One buffer per view, `size(m)` bytes each, concatenated in the views' order.
+  const joined = (of, list, size) => {
+    const out = new Uint8Array(list.reduce((n, m) => n + size(m), 0));
+    let at = 0;
+    for (const m of list) {
+      out.set(new Uint8Array(of(m)), at);
+      at += size(m);
+    }
+    return out;
+  };
+  const pixels = (m) => m.width * m.height;
+  const codes = joined((m) => m.codes, views, pixels);
   // Window labels of the views that have them, concatenated (see FitSession::new).
   const withWindows = views.filter((m) => m.windows);
-  const windowCodes = new Uint8Array(withWindows.reduce((n, m) => n + m.width * m.height, 0));
-  at = 0;
-  for (const m of withWindows) {
-    windowCodes.set(new Uint8Array(m.windows), at);
-    at += m.width * m.height;
-  }
+  const windowCodes = joined((m) => m.windows, withWindows, pixels);
   const windowFlags = withWindows.length ? Uint8Array.from(views.map((m) => (m.windows ? 1 : 0))) : new Uint8Array(0);
   // The photos' pixels (one per view, at its mask's size), when sent: the fit reads the rim's
   // edge in them, and the part colours are measured in them.
   const withPhotos = views.every((m) => m.rgba && m.rgba.byteLength === 4 * m.width * m.height);
-  const rgba = new Uint8Array(withPhotos ? 4 * total : 0);
-  if (withPhotos) {
-    at = 0;
-    for (const m of views) {
-      rgba.set(new Uint8Array(m.rgba), at);
-      at += 4 * m.width * m.height;
-    }
-  }
+  const rgba = joined((m) => m.rgba, withPhotos ? views : [], (m) => 4 * pixels(m));
   const session = new wasm.FitSession(
     generator,
     seed,

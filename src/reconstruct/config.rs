@@ -4,7 +4,8 @@
 //! `Plan`.
 
 use super::FitError;
-use super::rim::{DEFAULT_RIM_WEIGHT, Luma};
+use super::objective::resample_mask;
+use super::rim::{DEFAULT_RIM_WEIGHT, Luma, RimTerm};
 use super::views::{DEFAULT_FOV_Y, MaskStats, mask_stats};
 use super::windows::{DEFAULT_WINDOW_WEIGHT, WindowTerm};
 use crate::generators::{self, Generator, Lod};
@@ -121,6 +122,8 @@ impl Default for FitConfig {
 pub(super) struct Plan {
     /// The window term, shared by every stage's objective.
     pub windows: Option<Arc<WindowTerm>>,
+    /// The rim term of each stage (at its resolution), shared by every run.
+    pub rim: [Option<Arc<RimTerm>>; 3],
     /// Per view: what its mask tells.
     pub stats: Vec<MaskStats>,
     /// Per view: its vertical field of view.
@@ -285,8 +288,13 @@ impl FitConfig {
             }
         };
         let stage1 = config.stage1_evaluations().max(1);
+        let rim = config.resolutions.map(|side| {
+            let small: Vec<Mask> = masks.iter().map(|m| resample_mask(m, side)).collect();
+            RimTerm::new(&config.photos, &small, config.rim_weight).map(Arc::new)
+        });
         Ok(Plan {
             windows,
+            rim,
             stats,
             fov,
             candidates,

@@ -168,7 +168,7 @@ impl EdgeField {
                 strengths.push(sx.hypot(sy));
             }
         }
-        if strengths.len() < 16 {
+        if strengths.len() < MIN_EDGE_PIXELS {
             return None;
         }
         let k = strengths.len() * 9 / 10;
@@ -209,7 +209,7 @@ impl EdgeField {
     /// range, nearer ones preferred; `None` when none is strong enough.
     fn edge_offset(&self, p: DVec2, n: DVec2) -> Option<f64> {
         let r = self.range;
-        let steps = (2.0 * r).ceil() as i64;
+        let steps = (r / STEP).ceil() as i64;
         let across = |t: f64| self.gradient(p + t * n).dot(n).abs();
         let mut best: Option<(f64, f64)> = None;
         for k in -steps..=steps {
@@ -289,7 +289,6 @@ impl RimTerm {
             return 0.0;
         }
         let mut total = 0.0;
-        let mut counted = 0usize;
         // Per view: its near points, each with its pixel gradient of the view's mean cost.
         let mut pulls: Vec<(usize, Vec<Pull>)> = Vec::new();
         for (v, (field, view)) in self.views.iter().zip(views).enumerate() {
@@ -338,16 +337,16 @@ impl RimTerm {
                 continue;
             }
             total += cost / n_near as f64;
-            counted += 1;
             for p in &mut near {
                 p.2 /= n_near as f64;
             }
             pulls.push((v, near));
         }
-        if counted == 0 {
+        if pulls.is_empty() {
             return 0.0;
         }
-        let scale = self.weight / counted as f64;
+        // The mean over the views that count (one entry of `pulls` each).
+        let scale = self.weight / pulls.len() as f64;
         if let Some((grad_pos, grad_views)) = grads.as_mut() {
             for (v, near) in pulls {
                 let chain = ScreenChain::new(&views[v]);

@@ -63,6 +63,8 @@ pub(super) struct Run {
     masks: Vec<Mask>,
     /// The window term, shared by every stage's objective.
     windows: Option<Arc<WindowTerm>>,
+    /// The rim term of each stage, shared by every run (the plan's).
+    rim: [Option<Arc<RimTerm>>; 3],
     fov: Vec<f64>,
     searches: Vec<Search>,
     /// Index of the search being stepped; after the `auto` round, the chosen one.
@@ -92,6 +94,7 @@ impl Run {
     pub(super) fn new(config: FitConfig, masks: Vec<Mask>, plan: &Plan) -> Result<Run, FitError> {
         let Plan {
             windows,
+            rim,
             stats,
             fov,
             candidates,
@@ -138,7 +141,7 @@ impl Run {
                 false,
             )
             .with_windows(windows.clone())
-            .with_rim(RimTerm::new(&config.photos, &small, config.rim_weight).map(Arc::new));
+            .with_rim(rim[0].clone());
             let memetic = Memetic::new(
                 domain,
                 &seeds,
@@ -181,6 +184,7 @@ impl Run {
             config,
             masks,
             windows,
+            rim: rim.clone(),
             fov,
             searches,
             current: 0,
@@ -301,12 +305,11 @@ impl Run {
         let i = usize::from(stage - 1);
         let lod = self.config.lods[i];
         let lr = if stage == 2 { 0.01 } else { 0.0075 };
-        let masks: Vec<Mask> = self
+        let masks = self
             .masks
             .iter()
             .map(|m| resample_mask(m, self.config.resolutions[i]))
             .collect();
-        let rim = RimTerm::new(&self.config.photos, &masks, self.config.rim_weight).map(Arc::new);
         let objective = FitObjective::new(
             g,
             lod,
@@ -316,7 +319,7 @@ impl Run {
             true,
         )
         .with_windows(self.windows.clone())
-        .with_rim(rim);
+        .with_rim(self.rim[i].clone());
         let domain = search.memetic.domain().clone();
         let adam = Adam::new(
             &domain,
