@@ -20,7 +20,7 @@ use procfit::mask::Mask;
 use procfit::model::{Model, PartColors};
 use procfit::optim::Rng;
 use procfit::render::labels::LabelRenderer;
-use reconstruct_support::{generator, mesh_of, random_view_at, render_mask};
+use reconstruct_support::{generator, mesh_of, random_view_at, render_mask, square_view};
 
 /// The largest CIE76 ΔE*ab between a recovered colour and the truth (about 2.3 is the smallest
 /// difference people notice side by side; 6 is "a close match" in print).
@@ -91,12 +91,7 @@ fn scene(seed: u64) -> (Mesh, View, Mask, Vec<u8>) {
     let mesh = mesh_of("dish", &mug, Lod::High);
     let mut rng = Rng::new(seed);
     let params = random_view_at(&mut rng, &mesh, 0.7, 0.0);
-    let view = View {
-        width: SIDE,
-        height: SIDE,
-        pose: procfit::reconstruct::views::camera_pose(),
-        params,
-    };
+    let view = square_view(params, SIDE);
     let mask = render_mask(&mesh, &params, SIDE);
     let part = |name: &str| mesh.parts.iter().position(|p| p.name == name).unwrap();
     let mut albedo = vec![[0.5f32; 3]; mesh.parts.len()];

@@ -62,7 +62,7 @@ fn single_view_dishes_from_above_table() {
             let r = fit_dish(&mask, Vec::new());
             let iou = fit_iou64(&r, mesh, &truth);
             let pv = eval::result_photo_ious(&r, std::slice::from_ref(&mask)).unwrap()[0];
-            let luma = photo_with_dark_rim(&mask, &projected_rim(mesh, &view_of(truth, 256)));
+            let luma = photo_with_dark_rim(&mask, &projected_rim(mesh, &square_view(truth, 256)));
             let rp = fit_dish(&mask, vec![Some(luma)]);
             let iou_photo = fit_iou64(&rp, mesh, &truth);
             sum[k] = iou;
@@ -122,16 +122,6 @@ fn fit_dish(
     fit(config, vec![mask.clone()])
 }
 
-/// The view of `params` at `side²` through the fit's camera.
-fn view_of(params: procfit::camera::ViewParams, side: u32) -> procfit::camera::View {
-    procfit::camera::View {
-        width: side,
-        height: side,
-        pose: procfit::reconstruct::views::camera_pose(),
-        params,
-    }
-}
-
 /// The rim term (`reconstruct::rim`) on a photo from 60° above: the measured mug (not the
 /// generator's), its photo bright with the inside of its rim dark. From the mask alone the
 /// camera comes out too low with a shape to suit it; with the photo, the fitted rim's near half
@@ -143,7 +133,7 @@ fn the_rim_in_a_photo_fixes_the_camera_from_above() {
     let mut rng = Rng::new(31);
     let truth = view_at(&mut rng, &mesh, 0.5, 0.0, 1.05);
     let mask = render_mask(&mesh, &truth, side);
-    let luma = photo_with_dark_rim(&mask, &projected_rim(&mesh, &view_of(truth, side)));
+    let luma = photo_with_dark_rim(&mask, &projected_rim(&mesh, &square_view(truth, side)));
     let run = |photos| {
         let r = fit_dish(&mask, photos);
         (

@@ -233,8 +233,6 @@ fn focal_length_from_a_jpeg_file() {
 /// edge), and the objective's gradient with it matches central finite differences.
 #[test]
 fn rim_term_prefers_the_true_camera_and_its_gradient_matches_finite_differences() {
-    use procfit::camera::View;
-    use procfit::reconstruct::views::camera_pose;
     use procfit::reconstruct::{Luma, RimTerm};
 
     let mut rng = Rng::new(5);
@@ -258,12 +256,7 @@ fn rim_term_prefers_the_true_camera_and_its_gradient_matches_finite_differences(
     let c = truth.params().rotation_and_derivatives()[0] * (0.5 * (lo + hi)).as_dvec3() * scale;
     truth.tx = -c.x;
     truth.ty = -c.y;
-    let view_of = |vars: &ViewVars| View {
-        width: side,
-        height: side,
-        pose: camera_pose(),
-        params: vars.params(),
-    };
+    let view_of = |vars: &ViewVars| square_view(vars.params(), side);
     let mask = render_mask(&mesh, &truth.params(), side);
     // The photo: background 0.5, object 0.8, inside the true rim's outline 0.3.
     let tv = view_of(&truth);

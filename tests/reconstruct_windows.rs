@@ -15,7 +15,6 @@ use procfit::camera::View;
 use procfit::generators::{Lod, Mesh, building::idx};
 use procfit::mask::{LabelImage, Mask};
 use procfit::optim::Rng;
-use procfit::reconstruct::views::camera_pose;
 use procfit::reconstruct::{FitConfig, FitResult, Session};
 use procfit::render::LabelRenderer;
 use reconstruct_support::*;
@@ -114,12 +113,7 @@ fn case_seeded(seed: u64) -> Case {
     let mut rng = Rng::new(seed);
     let params = view_at(&mut rng, &mesh, 0.5, 0.0, 0.2);
     let mask = render_mask(&mesh, &params, SIDE);
-    let view = View {
-        width: SIDE,
-        height: SIDE,
-        pose: camera_pose(),
-        params,
-    };
+    let view = square_view(params, SIDE);
     let labels = window_labels(&mesh, &view);
     Case {
         truth,

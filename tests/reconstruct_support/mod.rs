@@ -94,14 +94,19 @@ fn view_with(rng: &mut Rng, mesh: &Mesh, fov_y: f64, yaw: f64, pitch: f64) -> Vi
     p
 }
 
-/// The mask of `mesh` seen through `params` at `side²`.
-pub fn render_mask(mesh: &Mesh, params: &ViewParams, side: u32) -> Mask {
-    let view = procfit::camera::View {
+/// The fit's camera with the object placed by `params`, for a `side²` image.
+pub fn square_view(params: ViewParams, side: u32) -> procfit::camera::View {
+    procfit::camera::View {
         width: side,
         height: side,
         pose: procfit::reconstruct::views::camera_pose(),
-        params: *params,
-    };
+        params,
+    }
+}
+
+/// The mask of `mesh` seen through `params` at `side²`.
+pub fn render_mask(mesh: &Mesh, params: &ViewParams, side: u32) -> Mask {
+    let view = square_view(*params, side);
     let c = render_coverage(mesh, &view).unwrap();
     // Binarise like a segmented photo.
     Mask::new(
