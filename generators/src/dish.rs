@@ -40,7 +40,7 @@
 
 use crate::ad::Scalar;
 use crate::build::{Builder, Model, generate, generate_with_vjp};
-use crate::{GenError, Generator, Lod, Mesh, ParamKind, ParamSpec, Part, Preset, Vjp};
+use crate::{EdgeRing, GenError, Generator, Lod, Mesh, ParamKind, ParamSpec, Part, Preset, Vjp};
 use glam::Vec2;
 use std::f64::consts::{PI, TAU};
 use std::sync::OnceLock;
@@ -662,6 +662,54 @@ fn saucer_profile<S: Scalar>(p: &[S], r0: S) -> Vec<(S, S)> {
     ]
 }
 
+/// Profile points of the body's lathe (see `build`): the bottom pole and `q − 1` bottom
+/// points, `2·q` in the corner, `16·q + 1` on the outer wall, `2·q − 1` inside the rim's half
+/// circle, `16·q + 1` on the inner wall, `2·q` in the inner corner, `q − 1` inner bottom points
+/// and the inner pole.
+fn body_profile_len(q: usize) -> usize {
+    40 * q + 1
+}
+
+/// The vertex of profile point `j` (not a pole) in sector `s` of a lathe of `n` sectors whose
+/// first vertex (its first pole) is `first`.
+fn lathe_vertex(first: usize, n: usize, j: usize, s: usize) -> u32 {
+    (first + 1 + (j - 1) * n + s % n) as u32
+}
+
+/// [`Generator::edge_rings`] of the dish. The rim: the top of the rounded rim, profile point
+/// `20·q` of the body's lathe. With a saucer, the cup's foot too, where the cup meets the
+/// saucer in a photo from above: the outer wall's first point (`3·q`), or where the wall turns to
+/// face the camera between it and the next point up (a belly hides the foot); seen inside the
+/// saucer rim's top (the saucer's profile point 5, its lathe after the body's and the handle's
+/// vertices). Measured on the Mitsuba photos' three cups on saucers over seeds 0–7 (mean IoU-64;
+/// 0.850 without the foot): this 0.863; the foot alone, skipped where the wall does not face
+/// the camera, 0.866; the contour searched from the corner's bottom (`q`) to `9·q` 0.861, from
+/// `3·q` to `9·q` 0.851 (a teacup's belly and its shadowed foot are two edges).
+pub fn edge_rings(params: &[f64], lod: Lod) -> Vec<EdgeRing> {
+    let q = lod_q(lod);
+    let n = 12 * q;
+    let ring = |first: usize, j: usize| (0..n).map(|s| lathe_vertex(first, n, j, s)).collect();
+    let mut rings = vec![EdgeRing {
+        vertices: ring(0, 20 * q),
+        ..EdgeRing::default()
+    }];
+    let on = |i: usize| params.get(i).is_some_and(|&v| v > 0.5);
+    if on(P_HAS_SAUCER) {
+        let body = 2 + (body_profile_len(q) - 2) * n;
+        let handle = if on(P_HAS_HANDLE) {
+            HANDLE_STEPS * 6 * q + 2
+        } else {
+            0
+        };
+        rings.push(EdgeRing {
+            vertices: ring(0, 3 * q),
+            above: vec![ring(0, 3 * q + 1)],
+            seen_within: ring(body + handle, 5),
+        });
+    }
+    rings
+}
+
 /// Revolves a profile from pole to pole (first and last points on the axis) around +Y in `n`
 /// sectors: welded rings, single pole vertices, u around the axis and v along the profile's
 /// arc length.
@@ -906,14 +954,10 @@ impl Generator for Dish {
         (out, P_HAS_SAUCER..N_PARAMS)
     }
 
-    /// The top of the rounded rim: the body's first lathe (welded rings of `12·q` vertices
-    /// after the bottom pole), profile point `20·q` (see `build`: `q` bottom points, `2·q` in
-    /// the corner, `16·q + 1` on the wall, the top of the half circle `q` further on).
-    fn rim(&self, _params: &[f64], lod: Lod) -> Vec<u32> {
-        let q = lod_q(lod);
-        let (n, top) = (12 * q, 20 * q);
-        let first = 1 + (top - 1) * n;
-        (first..first + n).map(|i| i as u32).collect()
+    /// The top of the rounded rim, and with a saucer the cup's foot, seen only where the wall
+    /// above it faces the camera and inside the saucer's rim (see [`edge_rings`]).
+    fn edge_rings(&self, params: &[f64], lod: Lod) -> Vec<EdgeRing> {
+        edge_rings(params, lod)
     }
 
     fn differentiable(&self) -> bool {

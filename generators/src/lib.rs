@@ -415,12 +415,13 @@ pub trait Generator: Send + Sync {
         let _ = (params, lod);
         Err(GenError::NotDifferentiable(self.name()))
     }
-    /// The vertices of `params`' mesh at `lod`, in order around it, of a closed ring that a
-    /// photo from above shows as an edge inside the silhouette: a dish's rim, where the inside
-    /// meets the outside. A fit reads the photo's edges along the ring's near half (the far half
-    /// is on the outline), which fixes how high the camera is where the outline alone cannot.
-    /// Empty (the default) when the model has no such ring.
-    fn rim(&self, _params: &[f64], _lod: Lod) -> Vec<u32> {
+    /// Closed rings of `params`' mesh at `lod` that a photo shows as edges inside the
+    /// silhouette: a dish's rim, where the inside meets the outside, and the foot of a cup
+    /// standing on a saucer, where the cup meets the saucer. A fit reads the photo's edges along
+    /// each ring's near half (the far half is on the outline), which fixes how high the camera
+    /// is, and how deep a cup stands, where the outline alone cannot. Empty (the default) when
+    /// the model has no such ring.
+    fn edge_rings(&self, _params: &[f64], _lod: Lod) -> Vec<EdgeRing> {
         Vec::new()
     }
     /// How unlike a real object `params` look, for breaking ties between fits whose silhouettes
@@ -494,4 +495,21 @@ pub fn all() -> Vec<&'static dyn Generator> {
 /// The generator with this machine name.
 pub fn by_name(name: &str) -> Option<&'static dyn Generator> {
     all().into_iter().find(|g| g.name() == name)
+}
+
+/// A closed ring of a mesh's vertices that a photo shows as an edge inside the silhouette
+/// ([`Generator::edge_rings`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct EdgeRing {
+    /// The ring's vertices, in order around it.
+    pub vertices: Vec<u32>,
+    /// Rings further up the surface from [`EdgeRing::vertices`], lowest first, each as long
+    /// and in the same order: the edge is then, around the ring, where the surface going up
+    /// first faces the camera (the lower occluding contour: a straight cup's foot, a bulging
+    /// teacup's belly). Empty: the ring itself, always seen (a rim's apex faces every camera
+    /// above it).
+    pub above: Vec<Vec<u32>>,
+    /// A ring in front whose projection a point must lie inside to be seen (the saucer's rim
+    /// around a cup's foot: from low, the saucer's front hides the foot). Empty: none.
+    pub seen_within: Vec<u32>,
 }

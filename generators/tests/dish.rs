@@ -63,7 +63,7 @@ fn random_in_range_parameters_give_valid_meshes() {
     }
 }
 
-/// `Dish::rim` is the body's top ring: consecutive vertices at one height, the highest of the
+/// The first of `Dish::edge_rings`, the rim, is the body's top ring: consecutive vertices at one height, the highest of the
 /// body, on a circle around the axis, going once around it; for every preset and level, and for
 /// random dishes.
 #[test]
@@ -84,7 +84,7 @@ fn the_rim_is_the_top_ring_of_the_body() {
     }
     for (what, p, lod) in cases {
         let m = Dish.generate(&p, lod).expect("generate");
-        let rim = Dish.rim(&p, lod);
+        let rim = Dish.edge_rings(&p, lod)[0].vertices.clone();
         assert_eq!(rim.len(), 12 << lod.index(), "{what} {lod:?}");
         // The body is part 0: the highest of its vertices.
         let mut body = vec![false; m.positions.len()];
@@ -130,6 +130,104 @@ fn the_rim_is_the_top_ring_of_the_body() {
             "{what} {lod:?}: turns {turn}"
         );
     }
+}
+
+/// With a saucer, the second edge ring is the cup's foot (the outer wall's lowest ring, the
+/// bottom corner's height above the saucer's well, and the rings above it up the outer surface,
+/// below half the cup's height) seen within the saucer rim's top ring (the saucer's highest ring); without one, there
+/// is only the rim. Every preset
+/// with a saucer and random dishes with and without a handle, at every level.
+#[test]
+fn the_foot_of_a_cup_on_a_saucer_is_an_edge_ring_seen_within_the_saucer_rim() {
+    let mut rng = Rng::new(11);
+    let mut cases: Vec<(String, Vec<f64>)> = Dish
+        .presets()
+        .into_iter()
+        .map(|p| (p.name.to_string(), p.values))
+        .collect();
+    for k in 0..30 {
+        let mut p = random_params(&Dish, &mut rng);
+        p[dish::P_HAS_SAUCER] = if k % 3 == 0 { 0.0 } else { 1.0 };
+        p[dish::P_HAS_HANDLE] = if k % 2 == 0 { 0.0 } else { 1.0 };
+        cases.push((format!("random {k}"), p));
+    }
+    let mut with_saucer = 0;
+    for (what, p) in cases {
+        for lod in Lod::ALL {
+            let m = Dish.generate(&p, lod).expect("generate");
+            let rings = Dish.edge_rings(&p, lod);
+            if p[dish::P_HAS_SAUCER] <= 0.5 {
+                assert_eq!(rings.len(), 1, "{what} {lod:?}: only the rim");
+                continue;
+            }
+            with_saucer += 1;
+            assert_eq!(rings.len(), 2, "{what} {lod:?}: the rim and the foot");
+            let foot = &rings[1];
+            let n = 12 << lod.index();
+            assert_eq!(foot.vertices.len(), n, "{what} {lod:?}");
+            assert_eq!(foot.seen_within.len(), n, "{what} {lod:?}");
+            let mut parts = vec![u8::MAX; m.positions.len()];
+            for (tri, &part) in m.triangles.iter().zip(&m.tri_parts) {
+                for &v in tri {
+                    parts[v as usize] = part;
+                }
+            }
+            let part_of = |v: u32| parts[v as usize];
+            let pos = |v: u32| m.positions[v as usize];
+            let radius = |v: u32| pos(v).x.hypot(pos(v).z);
+            // Body vertices on the saucer's part: the lowest of the body's outer wall.
+            let body_min_y = (0..m.positions.len() as u32)
+                .filter(|&v| part_of(v) == 0)
+                .map(|v| pos(v).y)
+                .fold(f32::MAX, f32::min);
+            let saucer: Vec<u32> = (0..m.positions.len() as u32)
+                .filter(|&v| part_of(v) != 0 && part_of(v) != 1)
+                .collect();
+            let saucer_top = saucer.iter().map(|&v| pos(v).y).fold(f32::MIN, f32::max);
+            assert!(
+                !foot.above.is_empty(),
+                "{what} {lod:?}: the rings above the foot"
+            );
+            let same_angle = |u: u32, v: u32| {
+                (pos(u).z.atan2(pos(u).x) - pos(v).z.atan2(pos(v).x)).abs() < 1e-3
+                    || radius(u) < 1e-6
+            };
+            for k in 0..n {
+                let (f, s) = (foot.vertices[k], foot.seen_within[k]);
+                assert_eq!(part_of(f), 0, "{what} {lod:?}: the foot is the body's");
+                assert!(
+                    (pos(f).y - body_min_y - dish::CORNER as f32).abs() < 1e-4,
+                    "{what} {lod:?}: the foot at {} above the body's bottom {body_min_y}",
+                    pos(f).y
+                );
+                let mut below = f;
+                for ring in &foot.above {
+                    assert_eq!(ring.len(), n, "{what} {lod:?}");
+                    let a = ring[k];
+                    assert_eq!(part_of(a), 0, "{what} {lod:?}: the body's outer surface");
+                    assert!(pos(a).y > pos(below).y, "{what} {lod:?}: going up");
+                    assert!(same_angle(f, a), "{what} {lod:?}: sector {k}");
+                    below = a;
+                }
+                // Up the lower part of the wall: below the middle of the wall.
+                let rim = pos(rings[0].vertices[k]).y;
+                assert!(
+                    pos(below).y < body_min_y + 0.5 * (rim - body_min_y),
+                    "{what} {lod:?}: the band reaches {} of {rim}",
+                    pos(below).y
+                );
+                assert!(saucer.contains(&s), "{what} {lod:?}: the saucer's rim");
+                assert!(
+                    (pos(s).y - saucer_top).abs() < 1e-4,
+                    "{what} {lod:?}: the saucer ring at {} below its top {saucer_top}",
+                    pos(s).y
+                );
+                assert!(radius(s) > radius(f), "{what} {lod:?}: around the foot");
+                assert!(same_angle(f, s), "{what} {lod:?}: sector {k}");
+            }
+        }
+    }
+    assert!(with_saucer >= 20, "{with_saucer} cases with a saucer");
 }
 
 /// Vertex count, triangle count and bounding box (min, max) of a preset at a level.

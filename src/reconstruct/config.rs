@@ -80,8 +80,9 @@ pub struct FitConfig {
     /// Weight of the window term relative to the silhouette MSE.
     pub window_weight: f64,
     /// The photo of each view, as brightness at its mask's size ([`super::rim`]): missing or
-    /// `None` entries (a mask image) have none. A generator with a rim ([`Generator::rim`])
-    /// lays its rim on the photo's edges.
+    /// `None` entries (a mask image) have none. A generator with edge rings
+    /// ([`Generator::edge_rings`]: a dish's rim, a cup's foot on a saucer) lays them on the
+    /// photo's edges.
     pub photos: Vec<Option<Luma>>,
     /// Weight of the rim term relative to the silhouette MSE (0: off).
     pub rim_weight: f64,

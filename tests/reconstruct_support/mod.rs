@@ -331,6 +331,13 @@ pub fn measured_mug_on_saucer() -> Mesh {
 /// (`mask`) bright, and inside `ring` (the rim projected, in order around it) dark, so the rim
 /// is an edge all round.
 pub fn photo_with_dark_rim(mask: &Mask, ring: &[glam::DVec2]) -> procfit::reconstruct::Luma {
+    photo_of_cup(mask, mask, ring)
+}
+
+/// [`photo_with_dark_rim`] of a cup on a saucer: the object's pixels outside the cup (`cup`,
+/// the mask of the cup alone) are the saucer, darker than the cup and lighter than the inside
+/// of the rim, so the cup's foot is an edge too.
+pub fn photo_of_cup(mask: &Mask, cup: &Mask, ring: &[glam::DVec2]) -> procfit::reconstruct::Luma {
     let inside_rim = |q: glam::DVec2| {
         let mut odd = false;
         for k in 0..ring.len() {
@@ -349,6 +356,8 @@ pub fn photo_with_dark_rim(mask: &Mask, ring: &[glam::DVec2]) -> procfit::recons
             128
         } else if inside_rim(q) {
             77
+        } else if cup.values()[i] < 0.5 {
+            150
         } else {
             204
         };
