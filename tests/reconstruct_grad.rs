@@ -241,21 +241,7 @@ fn rim_term_prefers_the_true_camera_and_its_gradient_matches_finite_differences(
     let lod = Lod::Medium;
     let mesh = mesh_of("dish", &x, lod);
     let side = 384u32;
-    let (lo, hi) = mesh.bounds().unwrap();
-    let size = f64::from((hi - lo).max_element());
-    let scale = 0.6 * 3.0 * 0.25f64.tan() / size;
-    let mut truth = ViewVars {
-        yaw: 0.3,
-        pitch: 0.9,
-        roll: 0.0,
-        tx: 0.0,
-        ty: 0.0,
-        log_scale: scale.ln(),
-        fov_y: 0.5,
-    };
-    let c = truth.params().rotation_and_derivatives()[0] * (0.5 * (lo + hi)).as_dvec3() * scale;
-    truth.tx = -c.x;
-    truth.ty = -c.y;
+    let truth = framing_view(&mesh, 0.3, 0.9);
     let view_of = |vars: &ViewVars| square_view(vars.params(), side);
     let mask = render_mask(&mesh, &truth.params(), side);
     // The photo: background 0.5, object 0.8, inside the true rim's outline 0.3.
@@ -290,29 +276,18 @@ fn rim_term_prefers_the_true_camera_and_its_gradient_matches_finite_differences(
     );
 
     // The objective with the rim term, near the truth: silhouette and rim gradients together.
-    let layout = Layout {
-        n_gen: x.len(),
-        n_views: 1,
-        fit_fov: false,
-        fov_y: vec![0.5],
-    };
-    let obj = FitObjective::new(g, lod, layout.clone(), vec![mask.clone()], 0.0, false)
-        .with_rim(RimTerm::new(&photos, &[mask], 1e-2).map(std::sync::Arc::new));
-    let mut p = x.clone();
-    p[8] *= 0.97;
-    p.resize(layout.len(), 0.0);
-    layout.set_view_vars(
-        &mut p,
-        0,
+    let mut near = x.clone();
+    near[8] *= 0.97;
+    let (obj, p, grad, o) = with_rim_near(
+        &near,
+        mask,
+        &photos,
         &ViewVars {
             pitch: truth.pitch - 0.04,
             ty: truth.ty + 0.01,
             ..truth
         },
     );
-    let mut grad = vec![0.0; p.len()];
-    obj.value_grad(&p, &mut grad);
-    let o = layout.view_offset(0);
     // Steps that move the rim by a pixel or two: the edge's offset, found between the field's
     // samples, follows a point's motion only on average (measured: camera pitch and height
     // within 3–6 %, the rim radius 2 %, the object scale 45 %; the silhouette alone 4–30 %
@@ -358,21 +333,7 @@ fn the_foot_of_a_cup_on_a_saucer_is_read_where_the_cup_meets_the_saucer() {
     let rings = g.edge_rings(&x, lod);
     assert_eq!(rings.len(), 2, "the rim and the foot");
     let side = 384u32;
-    let (lo, hi) = mesh.bounds().unwrap();
-    let size = f64::from((hi - lo).max_element());
-    let scale = 0.6 * 3.0 * 0.25f64.tan() / size;
-    let mut truth = ViewVars {
-        yaw: 0.5,
-        pitch: 0.7,
-        roll: 0.0,
-        tx: 0.0,
-        ty: 0.0,
-        log_scale: scale.ln(),
-        fov_y: 0.5,
-    };
-    let c = truth.params().rotation_and_derivatives()[0] * (0.5 * (lo + hi)).as_dvec3() * scale;
-    truth.tx = -c.x;
-    truth.ty = -c.y;
+    let truth = framing_view(&mesh, 0.5, 0.7);
     let view_of = |vars: &ViewVars| square_view(vars.params(), side);
     let mask = render_mask(&mesh, &truth.params(), side);
     // The cup alone: the body's and the handle's triangles (parts 0 and 1).
@@ -406,32 +367,53 @@ fn the_foot_of_a_cup_on_a_saucer_is_read_where_the_cup_meets_the_saucer() {
     );
 
     let photos = [Some(photo_of_cup(&mask, &cup, &ring))];
+    let mut near = x.clone();
+    near[0] *= 0.97;
+    let (obj, p, grad, o) = with_rim_near(
+        &near,
+        mask,
+        &photos,
+        &ViewVars {
+            pitch: truth.pitch - 0.03,
+            ..truth
+        },
+    );
+    // Steps that move the rings by a pixel or two (the height's silhouette gradient alone
+    // bends beyond 3e-3: 0.0255 analytic, finite differences 0.0256 / 0.0218 / 0.0111 at
+    // 3e-3 / 1e-2 / 3e-2).
+    let checks = [(o + 1, 1e-2), (o + 5, 2e-2), (0, 1e-2), (9, 3e-3)];
+    check_finite_differences(|x| obj.value(x), &p, &grad, &checks, 0.35);
+}
+
+/// The dish objective (medium detail, one view of `mask`) with the rim term of `photos` at
+/// weight 1e-2, at the dish `x` seen through `view`: the objective, that point, the gradient
+/// there and the view's offset in it.
+fn with_rim_near(
+    x: &[f64],
+    mask: procfit::mask::Mask,
+    photos: &[Option<procfit::reconstruct::Luma>],
+    view: &ViewVars,
+) -> (FitObjective, Vec<f64>, Vec<f64>, usize) {
     let layout = Layout {
         n_gen: x.len(),
         n_views: 1,
         fit_fov: false,
         fov_y: vec![0.5],
     };
-    let obj = FitObjective::new(g, lod, layout.clone(), vec![mask.clone()], 0.0, false).with_rim(
-        RimTerm::new(&photos, std::slice::from_ref(&mask), 1e-2).map(std::sync::Arc::new),
-    );
-    let mut p = x.clone();
-    p[0] *= 0.97;
+    let rim = procfit::reconstruct::RimTerm::new(photos, std::slice::from_ref(&mask), 1e-2);
+    let obj = FitObjective::new(
+        generator("dish"),
+        Lod::Medium,
+        layout.clone(),
+        vec![mask],
+        0.0,
+        false,
+    )
+    .with_rim(rim.map(std::sync::Arc::new));
+    let mut p = x.to_vec();
     p.resize(layout.len(), 0.0);
-    layout.set_view_vars(
-        &mut p,
-        0,
-        &ViewVars {
-            pitch: truth.pitch - 0.03,
-            ..truth
-        },
-    );
+    layout.set_view_vars(&mut p, 0, view);
     let mut grad = vec![0.0; p.len()];
     obj.value_grad(&p, &mut grad);
-    let o = layout.view_offset(0);
-    // Steps that move the rings by a pixel or two (the height's silhouette gradient alone
-    // bends beyond 3e-3: 0.0255 analytic, finite differences 0.0256 / 0.0218 / 0.0111 at
-    // 3e-3 / 1e-2 / 3e-2).
-    let checks = [(o + 1, 1e-2), (o + 5, 2e-2), (0, 1e-2), (9, 3e-3)];
-    check_finite_differences(|x| obj.value(x), &p, &grad, &checks, 0.35);
+    (obj, p, grad, layout.view_offset(0))
 }

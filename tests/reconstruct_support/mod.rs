@@ -104,6 +104,27 @@ pub fn square_view(params: ViewParams, side: u32) -> procfit::camera::View {
     }
 }
 
+/// A camera at `yaw` and `pitch` (radians; the fov 0.5 rad) that sees `mesh` centred,
+/// its largest extent 60 % of the image's height.
+pub fn framing_view(mesh: &Mesh, yaw: f64, pitch: f64) -> ViewVars {
+    let (lo, hi) = mesh.bounds().unwrap();
+    let size = f64::from((hi - lo).max_element());
+    let scale = 0.6 * 3.0 * 0.25f64.tan() / size;
+    let mut vars = ViewVars {
+        yaw,
+        pitch,
+        roll: 0.0,
+        tx: 0.0,
+        ty: 0.0,
+        log_scale: scale.ln(),
+        fov_y: 0.5,
+    };
+    let c = vars.params().rotation_and_derivatives()[0] * (0.5 * (lo + hi)).as_dvec3() * scale;
+    vars.tx = -c.x;
+    vars.ty = -c.y;
+    vars
+}
+
 /// The mask of `mesh` seen through `params` at `side²`.
 pub fn render_mask(mesh: &Mesh, params: &ViewParams, side: u32) -> Mask {
     let view = square_view(*params, side);
