@@ -14,7 +14,8 @@
 //! The term: the generator's edge rings ([`Generator::edge_rings`]) are projected through each
 //! view; on each ring's near half (points nearer the camera than the ring's centre by more than
 //! half the ring's depth, so the ends, which run into the outline, are left out; for a ring with
-//! [`EdgeRing::above`], only where the surface faces the camera; for one with
+//! [`EdgeRing::above`], the point where the surface going up first faces the camera, none where
+//! it never does; for one with
 //! [`EdgeRing::seen_within`], only inside that ring's projection), each point looks along the
 //! ring's normal on screen, up to [`RANGE_SHARE`] of the image either way, for the strongest
 //! brightness edge across that normal inside the object (not within two pixels of the mask's
@@ -285,21 +286,16 @@ fn ring_cost(
     let mut chain = vec![ring.vertices.clone()];
     chain.extend(ring.above.iter().cloned());
     let chain_cam: Vec<Vec<DVec3>> = chain.iter().map(|r| cam_of(r)).collect();
-    let axis = {
-        let c = base.iter().copied().sum::<DVec3>() / m as f64;
-        let top = chain_cam[chain_cam.len() - 1]
-            .iter()
-            .copied()
-            .sum::<DVec3>()
-            / m as f64;
-        (top - c).normalize_or_zero()
-    };
+    // The lathe's axis: through the first ring's centre towards the last one's.
+    let mean = |ring: &[DVec3]| ring.iter().copied().sum::<DVec3>() / m as f64;
+    let origin = mean(&base);
+    let axis = (mean(&chain_cam[chain_cam.len() - 1]) - origin).normalize_or_zero();
     let points: Vec<Option<(Between, DVec3)>> = (0..m)
         .map(|i| {
             if chain.len() == 1 {
                 return Some(([(ring.vertices[i], 1.0), (ring.vertices[i], 0.0)], base[i]));
             }
-            contour(&chain, &chain_cam, i, axis)
+            contour(&chain, &chain_cam, i, (origin, axis))
         })
         .collect();
     let within: Vec<DVec2> = cam_of(&ring.seen_within)
@@ -360,21 +356,21 @@ fn ring_cost(
 /// Going up `chain` (rings, lowest first; camera space in `cam`) at position `i` around them,
 /// where the surface first faces the camera: the vertices it lies between with their weights
 /// and the point. A vertex faces the camera when its outward normal (the surface's tangent
-/// turned outward in the plane of the lathe's `axis` and the vertex) points at the camera; between a vertex that does not and one that does, the point is where that
+/// turned outward in the plane of the vertex and the lathe's axis, through `origin` along
+/// `axis`) points at the camera; between a vertex that does not and one that does, the point is where that
 /// facing crosses zero, linearly. `None` when no vertex faces the camera.
 fn contour(
     chain: &[Vec<u32>],
     cam: &[Vec<DVec3>],
     i: usize,
-    axis: DVec3,
+    (origin, axis): (DVec3, DVec3),
 ) -> Option<(Between, DVec3)> {
     let k_max = chain.len() - 1;
     let facing = |k: usize| {
         let p = cam[k][i];
         let along = (cam[(k + 1).min(k_max)][i] - cam[k.saturating_sub(1)][i]).normalize_or_zero();
-        let centre = cam[k].iter().copied().sum::<DVec3>() / cam[k].len() as f64;
-        let mut out = p - centre;
-        out = (out - out.dot(axis) * axis).normalize_or_zero();
+        let out = p - origin;
+        let out = (out - out.dot(axis) * axis).normalize_or_zero();
         // The tangent a·out + b·axis turned clockwise in the meridian plane: b·out − a·axis.
         let normal = along.dot(axis) * out - along.dot(out) * axis;
         normal.dot(-p.normalize_or_zero())
@@ -553,7 +549,7 @@ mod tests {
             let i = (0..n)
                 .min_by(|&a, &b| (-cam[0][a].z).total_cmp(&(-cam[0][b].z)))
                 .unwrap();
-            contour(&ids, &cam, i, axis).map(|(w, p)| (i, w, p))
+            contour(&ids, &cam, i, (DVec3::new(0.0, 0.0, -5.0), axis)).map(|(w, p)| (i, w, p))
         };
         let up = 45f64.to_radians();
         let widening = [(1.0, 0.0), (1.05, 0.5), (1.1, 1.0), (1.15, 1.5)];
