@@ -21,12 +21,12 @@
 //! cases at a reduced budget.
 
 use crate::bench_cases::BenchFit;
-use crate::camera::{View, ViewParams};
+use crate::camera::View;
 use crate::generators::building::idx;
 use crate::generators::{Generator, Lod, Mesh, Part};
 use crate::mask::Mask;
 use crate::reconstruct::eval::view_iou;
-use crate::reconstruct::views::{ViewVars, camera_pose};
+use crate::reconstruct::views::ViewVars;
 use crate::reconstruct::{
     FitConfig, FitError, FitResult, Session, align_to_reference, iou64, render_coverage,
 };
@@ -365,28 +365,16 @@ pub fn case_view(mesh: &Mesh, yaw: f64, pitch: f64) -> Result<View, FitError> {
     let (lo, hi) = mesh
         .bounds()
         .ok_or_else(|| FitError("a benchmark mesh is empty".into()))?;
-    let size = f64::from((hi - lo).max_element());
-    let centre = (0.5 * (lo + hi)).as_dvec3();
-    let half_h = 3.0 * (0.5 * FOV_Y).tan();
-    let scale = 1.1 * half_h / size;
-    let mut params: ViewParams = ViewVars {
+    let vars = ViewVars {
         yaw,
         pitch,
         roll: 0.0,
         tx: 0.0,
         ty: 0.0,
-        log_scale: scale.ln(),
+        log_scale: 0.0,
         fov_y: FOV_Y,
-    }
-    .params();
-    let c = params.rotation_and_derivatives()[0] * centre * scale;
-    params.translation = DVec3::new(-c.x, -c.y, 0.0);
-    Ok(View {
-        width: SIDE,
-        height: SIDE,
-        pose: camera_pose(),
-        params,
-    })
+    };
+    Ok(vars.framing(lo, hi, 1.1).view(SIDE, SIDE))
 }
 
 fn rect(x0: f32, x1: f32, z0: f32, z1: f32) -> Rect {

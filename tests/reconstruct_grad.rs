@@ -242,7 +242,7 @@ fn rim_term_prefers_the_true_camera_and_its_gradient_matches_finite_differences(
     let mesh = mesh_of("dish", &x, lod);
     let side = 384u32;
     let truth = framing_view(&mesh, 0.3, 0.9);
-    let view_of = |vars: &ViewVars| square_view(vars.params(), side);
+    let view_of = |vars: &ViewVars| vars.view(side, side);
     let mask = render_mask(&mesh, &truth.params(), side);
     // The photo: background 0.5, object 0.8, inside the true rim's outline 0.3.
     let tv = view_of(&truth);
@@ -334,7 +334,7 @@ fn the_foot_of_a_cup_on_a_saucer_is_read_where_the_cup_meets_the_saucer() {
     assert_eq!(rings.len(), 2, "the rim and the foot");
     let side = 384u32;
     let truth = framing_view(&mesh, 0.5, 0.7);
-    let view_of = |vars: &ViewVars| square_view(vars.params(), side);
+    let view_of = |vars: &ViewVars| vars.view(side, side);
     let mask = render_mask(&mesh, &truth.params(), side);
     // The cup alone: the body's and the handle's triangles (parts 0 and 1).
     let mut cup_mesh = mesh.clone();

@@ -617,11 +617,16 @@ impl Model for Dish {
         }
         prof.push((zero, S::cst(WALL)));
         debug_assert!(corner_start == nb);
+        debug_assert_eq!(
+            prof.len(),
+            body_profile_len(q),
+            "edge_rings reads this layout"
+        );
 
-        lathe(&mut b, &prof, 12 * q, 0, 1);
+        lathe(&mut b, &prof, lathe_sectors(q), 0, 1);
 
         if p[P_HAS_HANDLE].val() > 0.5 {
-            handle(&mut b, p, &wall, height, 6 * q);
+            handle(&mut b, p, &wall, height, handle_sectors(q));
         }
         if p[P_HAS_SAUCER].val() > 0.5 {
             // The cup stands in the saucer's well: lift it, then lathe the saucer below.
@@ -630,7 +635,7 @@ impl Model for Dish {
             for v in &mut b.pos {
                 v[1] = v[1] + lift;
             }
-            lathe(&mut b, &sp, 12 * q, 2, 3);
+            lathe(&mut b, &sp, lathe_sectors(q), 2, 3);
         }
         Ok(b)
     }
@@ -670,6 +675,17 @@ fn body_profile_len(q: usize) -> usize {
     40 * q + 1
 }
 
+/// Sectors around the body's and the saucer's lathes.
+fn lathe_sectors(q: usize) -> usize {
+    12 * q
+}
+
+/// Sectors around the handle's tube; the handle has `HANDLE_STEPS` rings of them and the two
+/// end caps' centres.
+fn handle_sectors(q: usize) -> usize {
+    6 * q
+}
+
 /// The vertex of profile point `j` (not a pole) in sector `s` of a lathe of `n` sectors whose
 /// first vertex (its first pole) is `first`.
 fn lathe_vertex(first: usize, n: usize, j: usize, s: usize) -> u32 {
@@ -688,7 +704,7 @@ fn lathe_vertex(first: usize, n: usize, j: usize, s: usize) -> u32 {
 /// term at half the rim's weight 0.842, at twice 0.863.
 pub fn edge_rings(params: &[f64], lod: Lod) -> Vec<EdgeRing> {
     let q = lod_q(lod);
-    let n = 12 * q;
+    let n = lathe_sectors(q);
     let ring = |first: usize, j: usize| (0..n).map(|s| lathe_vertex(first, n, j, s)).collect();
     let mut rings = vec![EdgeRing {
         vertices: ring(0, 20 * q),
@@ -698,7 +714,7 @@ pub fn edge_rings(params: &[f64], lod: Lod) -> Vec<EdgeRing> {
     if on(P_HAS_SAUCER) {
         let body = 2 + (body_profile_len(q) - 2) * n;
         let handle = if on(P_HAS_HANDLE) {
-            HANDLE_STEPS * 6 * q + 2
+            HANDLE_STEPS * handle_sectors(q) + 2
         } else {
             0
         };
@@ -955,8 +971,8 @@ impl Generator for Dish {
         (out, P_HAS_SAUCER..N_PARAMS)
     }
 
-    /// The top of the rounded rim, and with a saucer the cup's foot, seen only where the wall
-    /// above it faces the camera and inside the saucer's rim (see [`edge_rings`]).
+    /// The top of the rounded rim, and with a saucer the cup's foot (or just above it, where the
+    /// wall turns to face the camera), seen inside the saucer's rim (see [`edge_rings`]).
     fn edge_rings(&self, params: &[f64], lod: Lod) -> Vec<EdgeRing> {
         edge_rings(params, lod)
     }

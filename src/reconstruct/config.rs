@@ -123,7 +123,9 @@ impl Default for FitConfig {
 pub(super) struct Plan {
     /// The window term, shared by every stage's objective.
     pub windows: Option<Arc<WindowTerm>>,
-    /// The rim term of each stage (at its resolution), shared by every run.
+    /// The masks at each stage's resolution, shared by every run.
+    pub stage_masks: Arc<[Vec<Mask>; 3]>,
+    /// The rim term of each stage (for its masks), shared by every run.
     pub rim: [Option<Arc<RimTerm>>; 3],
     /// Per view: what its mask tells.
     pub stats: Vec<MaskStats>,
@@ -289,12 +291,17 @@ impl FitConfig {
             }
         };
         let stage1 = config.stage1_evaluations().max(1);
-        let rim = config.resolutions.map(|side| {
-            let small: Vec<Mask> = masks.iter().map(|m| resample_mask(m, side)).collect();
-            RimTerm::new(&config.photos, &small, config.rim_weight).map(Arc::new)
+        let stage_masks: Arc<[Vec<Mask>; 3]> = Arc::new(
+            config
+                .resolutions
+                .map(|side| masks.iter().map(|m| resample_mask(m, side)).collect()),
+        );
+        let rim = [0, 1, 2].map(|i| {
+            RimTerm::new(&config.photos, &stage_masks[i], config.rim_weight).map(Arc::new)
         });
         Ok(Plan {
             windows,
+            stage_masks,
             rim,
             stats,
             fov,

@@ -63,6 +63,8 @@ pub(super) struct Run {
     masks: Vec<Mask>,
     /// The window term, shared by every stage's objective.
     windows: Option<Arc<WindowTerm>>,
+    /// The masks at each stage's resolution, shared by every run (the plan's).
+    stage_masks: Arc<[Vec<Mask>; 3]>,
     /// The rim term of each stage, shared by every run (the plan's).
     rim: [Option<Arc<RimTerm>>; 3],
     fov: Vec<f64>,
@@ -94,6 +96,7 @@ impl Run {
     pub(super) fn new(config: FitConfig, masks: Vec<Mask>, plan: &Plan) -> Result<Run, FitError> {
         let Plan {
             windows,
+            stage_masks,
             rim,
             stats,
             fov,
@@ -108,10 +111,6 @@ impl Run {
         } else {
             stage1
         };
-        let small: Vec<Mask> = masks
-            .iter()
-            .map(|m| resample_mask(m, config.resolutions[0]))
-            .collect();
         let mut searches = Vec::new();
         for (k, &g) in candidates.iter().enumerate() {
             let (layout, domain, seeds) = start_points(
@@ -136,7 +135,7 @@ impl Run {
                 g,
                 config.lods[0],
                 layout,
-                small.clone(),
+                stage_masks[0].clone(),
                 config.search_reg_weight,
                 false,
             )
@@ -184,6 +183,7 @@ impl Run {
             config,
             masks,
             windows,
+            stage_masks: stage_masks.clone(),
             rim: rim.clone(),
             fov,
             searches,
@@ -305,16 +305,11 @@ impl Run {
         let i = usize::from(stage - 1);
         let lod = self.config.lods[i];
         let lr = if stage == 2 { 0.01 } else { 0.0075 };
-        let masks = self
-            .masks
-            .iter()
-            .map(|m| resample_mask(m, self.config.resolutions[i]))
-            .collect();
         let objective = FitObjective::new(
             g,
             lod,
             search.objective.layout().clone(),
-            masks,
+            self.stage_masks[i].clone(),
             self.config.reg_weight,
             true,
         )

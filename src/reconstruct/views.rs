@@ -259,6 +259,22 @@ pub fn renderer_angles_jacobian(yaw: f64, pitch: f64, roll: f64) -> [[f64; 3]; 3
 }
 
 impl ViewVars {
+    /// These angles and field of view, with the scale and shift that show the box `lo..hi` (in
+    /// the object's frame, with an extent) centred in the image, its largest side `fill` times
+    /// the image's half height.
+    pub fn framing(self, lo: Vec3, hi: Vec3, fill: f64) -> ViewVars {
+        let size = f64::from((hi - lo).max_element());
+        let half_h = CAMERA_DISTANCE * (0.5 * self.fov_y).tan();
+        let scale = fill * half_h / size;
+        let c = self.params().rotation_and_derivatives()[0] * (0.5 * (lo + hi)).as_dvec3() * scale;
+        ViewVars {
+            tx: -c.x,
+            ty: -c.y,
+            log_scale: scale.ln(),
+            ..self
+        }
+    }
+
     /// The renderer's parameters for these values.
     pub fn params(&self) -> ViewParams {
         let [yaw, pitch, roll] = renderer_angles(self.yaw, self.pitch, self.roll);

@@ -3,13 +3,14 @@
 
 #![allow(dead_code, reason = "each test binary uses a different subset")]
 
-use glam::{DVec3, Vec3};
+use glam::Vec3;
 use procfit::camera::ViewParams;
 use procfit::generators::{self, Generator, Lod, Mesh};
 use procfit::mask::Mask;
 use procfit::optim::Rng;
 use procfit::reconstruct::{
-    FitConfig, FitResult, Session, align_to_reference, iou64, render_coverage, views::ViewVars,
+    CAMERA_DISTANCE, FitConfig, FitResult, Session, align_to_reference, iou64, render_coverage,
+    views::ViewVars,
 };
 
 /// A random dish: a seed's body and handle blended towards another's, then perturbed smoothly
@@ -70,28 +71,22 @@ pub fn view_at(rng: &mut Rng, mesh: &Mesh, fov_y: f64, spin: f64, pitch: f64) ->
 
 fn view_with(rng: &mut Rng, mesh: &Mesh, fov_y: f64, yaw: f64, pitch: f64) -> ViewParams {
     let (lo, hi) = mesh.bounds().unwrap();
-    let size = f64::from((hi - lo).max_element());
-    let centre = (0.5 * (lo + hi)).as_dvec3();
     let roll = rng.range(-0.05, 0.05);
-    let half_h = 3.0 * (0.5 * fov_y).tan();
-    let scale = rng.range(0.9, 1.3) * half_h / size;
-    let mut p = ViewVars {
+    let fill = rng.range(0.9, 1.3);
+    let mut vars = ViewVars {
         yaw,
         pitch,
         roll,
         tx: 0.0,
         ty: 0.0,
-        log_scale: scale.ln(),
+        log_scale: 0.0,
         fov_y,
     }
-    .params();
-    let c = p.rotation_and_derivatives()[0] * centre * scale;
-    p.translation = DVec3::new(
-        -c.x + rng.range(-0.1, 0.1) * half_h,
-        -c.y + rng.range(-0.1, 0.1) * half_h,
-        0.0,
-    );
-    p
+    .framing(lo, hi, fill);
+    let half_h = CAMERA_DISTANCE * (0.5 * fov_y).tan();
+    vars.tx += rng.range(-0.1, 0.1) * half_h;
+    vars.ty += rng.range(-0.1, 0.1) * half_h;
+    vars.params()
 }
 
 /// The fit's camera with the object placed by `params`, for a `side²` image.
@@ -108,21 +103,16 @@ pub fn square_view(params: ViewParams, side: u32) -> procfit::camera::View {
 /// its largest extent 60 % of the image's height.
 pub fn framing_view(mesh: &Mesh, yaw: f64, pitch: f64) -> ViewVars {
     let (lo, hi) = mesh.bounds().unwrap();
-    let size = f64::from((hi - lo).max_element());
-    let scale = 0.6 * 3.0 * 0.25f64.tan() / size;
-    let mut vars = ViewVars {
+    let vars = ViewVars {
         yaw,
         pitch,
         roll: 0.0,
         tx: 0.0,
         ty: 0.0,
-        log_scale: scale.ln(),
+        log_scale: 0.0,
         fov_y: 0.5,
     };
-    let c = vars.params().rotation_and_derivatives()[0] * (0.5 * (lo + hi)).as_dvec3() * scale;
-    vars.tx = -c.x;
-    vars.ty = -c.y;
-    vars
+    vars.framing(lo, hi, 0.6)
 }
 
 /// The mask of `mesh` seen through `params` at `side²`.
