@@ -438,6 +438,12 @@ pub trait Generator: Send + Sync {
     fn regularizer(&self, params: &[f64]) -> (f64, Vec<f64>) {
         (0.0, vec![0.0; params.len()])
     }
+    /// How unlike real objects' shapes `params` are where a photo may not show them, and its
+    /// gradient (same length as `params`): the fit's gradient stages add it to the loss (the
+    /// search leaves it out, so it does not choose between seeds). Zero by default.
+    fn shape_prior(&self, params: &[f64]) -> (f64, Vec<f64>) {
+        (0.0, vec![0.0; params.len()])
+    }
 
     /// Seeds with an optional part that no regular seed has (a cup's saucer), and the range of
     /// parameters only that part uses: stage 1 screens the extras after [`Generator::seeds`]
@@ -506,8 +512,8 @@ pub struct EdgeRing {
     /// Rings further up the surface from [`EdgeRing::vertices`], lowest first, each as long
     /// and in the same order: the edge is then, around the ring, where the surface going up
     /// first faces the camera (the lower occluding contour: a straight cup's foot, a bulging
-    /// teacup's belly). Empty: the ring itself, always seen (a rim's apex faces every camera
-    /// above it).
+    /// teacup's belly). Empty: the ring itself, always taken as seen (a rim's edge against the
+    /// cup's inside, from every camera above it).
     pub above: Vec<Vec<u32>>,
     /// A ring in front whose projection a point must lie inside to be seen (the saucer's rim
     /// around a cup's foot: from low, the saucer's front hides the foot). Empty: none.

@@ -63,11 +63,12 @@ fn random_in_range_parameters_give_valid_meshes() {
     }
 }
 
-/// The first of `Dish::edge_rings`, the rim, is the body's top ring: consecutive vertices at one height, the highest of the
-/// body, on a circle around the axis, going once around it; for every preset and level, and for
-/// random dishes.
+/// The first of `Dish::edge_rings`, the rim, is where the body's rounded top meets its inside:
+/// consecutive vertices at one height, within a wall of the body's top, on a circle around the
+/// axis on the inner side of the lip's apex, going once around it; for every preset and level,
+/// and for random dishes.
 #[test]
-fn the_rim_is_the_top_ring_of_the_body() {
+fn the_rim_is_where_the_top_of_the_body_meets_its_inside() {
     let mut rng = Rng::new(7);
     let mut cases: Vec<(String, Vec<f64>, Lod)> = Vec::new();
     for preset in Dish.presets() {
@@ -108,13 +109,25 @@ fn the_rim_is_the_top_ring_of_the_body() {
                 "{what} {lod:?}: rim vertex {i} is not the body's"
             );
             let p = m.positions[i as usize];
-            // The half circle's middle; a flared wall (a plate's is almost flat) tilts the
-            // lip, so the highest point may lie beside it, on the lip all the same.
-            let tol = 0.5 * dish::WALL as f32;
+            // The half circle's inner end: half a wall below its apex on a straight wall; a
+            // flared wall (a plate's is almost flat) tilts the lip, so it may lie higher.
+            let wall = dish::WALL as f32;
             assert!(
-                (p.y - top).abs() < tol,
+                (p.y - top).abs() < wall,
                 "{what} {lod:?}: rim at {} below the top {top}",
                 p.y
+            );
+            // On the lip's inner side: no further out than the body's highest ring (the lip's
+            // apex on a straight wall; on a flared one the inner end itself may be highest),
+            // and within a wall of it.
+            let apex = (0..m.positions.len())
+                .filter(|&j| body[j] && m.positions[j].y > top - 1e-6)
+                .map(|j| radius(j as u32))
+                .fold(f32::MIN, f32::max);
+            let inset = apex - radius(i);
+            assert!(
+                inset > -1e-5 && inset < wall,
+                "{what} {lod:?}: the rim {inset} inside the lip's apex"
             );
             assert!(
                 (radius(i) - r0).abs() < 1e-5 * r0.max(1.0),
@@ -129,6 +142,24 @@ fn the_rim_is_the_top_ring_of_the_body() {
             (turn.abs() - std::f32::consts::TAU).abs() < 1e-3,
             "{what} {lod:?}: turns {turn}"
         );
+    }
+    // On a straight wall (the mug) the ring is the lip's inner end, half a wall inside its
+    // apex and half a wall below it, not the apex itself.
+    let mug = Dish.preset("mug").expect("mug").values;
+    let m = Dish.generate(&mug, Lod::High).expect("generate");
+    let rim = &Dish.edge_rings(&mug, Lod::High)[0].vertices;
+    let top = m.positions.iter().map(|p| p.y).fold(f32::MIN, f32::max);
+    let apex = m
+        .positions
+        .iter()
+        .filter(|p| p.y > top - 1e-6)
+        .map(|p| p.x.hypot(p.z))
+        .fold(f32::MIN, f32::max);
+    let half = 0.5 * dish::WALL as f32;
+    for &i in rim {
+        let p = m.positions[i as usize];
+        assert!((apex - p.x.hypot(p.z) - half).abs() < 0.2 * half, "{p}");
+        assert!((top - p.y - half).abs() < 0.2 * half, "{p}");
     }
 }
 
@@ -180,6 +211,10 @@ fn the_foot_of_a_cup_on_a_saucer_is_an_edge_ring_seen_within_the_saucer_rim() {
                 .filter(|&v| part_of(v) == 0)
                 .map(|v| pos(v).y)
                 .fold(f32::MAX, f32::min);
+            let body_top = (0..m.positions.len() as u32)
+                .filter(|&v| part_of(v) == 0)
+                .map(|v| pos(v).y)
+                .fold(f32::MIN, f32::max);
             let saucer: Vec<u32> = (0..m.positions.len() as u32)
                 .filter(|&v| part_of(v) != 0 && part_of(v) != 1)
                 .collect();
@@ -210,10 +245,9 @@ fn the_foot_of_a_cup_on_a_saucer_is_an_edge_ring_seen_within_the_saucer_rim() {
                     below = a;
                 }
                 // Up the lower part of the wall: below the middle of the wall.
-                let rim = pos(rings[0].vertices[k]).y;
                 assert!(
-                    pos(below).y < body_min_y + 0.5 * (rim - body_min_y),
-                    "{what} {lod:?}: the band reaches {} of {rim}",
+                    pos(below).y < body_min_y + 0.5 * (body_top - body_min_y),
+                    "{what} {lod:?}: the band reaches {} of {body_top}",
                     pos(below).y
                 );
                 assert!(saucer.contains(&s), "{what} {lod:?}: the saucer's rim");
@@ -621,6 +655,63 @@ fn regularizer_gradient_matches_finite_differences() {
         ("jumpy", jumpy),
     ] {
         assert!(Dish.regularizer(&p).0 > base + 0.01, "{what}");
+    }
+}
+
+/// The shape prior (the profile's kinks): its gradient against central differences, and where
+/// it fires. Every preset's smooth wall costs little (the vase most, its neck); a tea cup whose
+/// lower half is a narrow cylinder under a bowl costs more than the same cup with a steady
+/// curve, and a mug on a narrow foot more than the mug; a straight or steadily curving wall
+/// costs nothing.
+#[test]
+fn the_shape_prior_finds_kinks_in_the_wall() {
+    let mut rng = Rng::new(12);
+    for _ in 0..20 {
+        let p = random_params(&Dish, &mut rng);
+        let (v, g) = Dish.shape_prior(&p);
+        assert!(v >= 0.0);
+        for (i, s) in Dish.params().iter().enumerate() {
+            let h = 1e-6;
+            let (mut a, mut b) = (p.clone(), p.clone());
+            a[i] += h;
+            b[i] -= h;
+            if !s.kind.is_continuous() || a[i] > s.max || b[i] < s.min {
+                continue;
+            }
+            let fd = (Dish.shape_prior(&a).0 - Dish.shape_prior(&b).0) / (2.0 * h);
+            assert!(
+                (fd - g[i]).abs() < 1e-5 * (1.0 + fd.abs()),
+                "{}: {fd} vs {}",
+                s.name,
+                g[i]
+            );
+        }
+    }
+    for preset in Dish.presets() {
+        let (v, _) = Dish.shape_prior(&preset.values);
+        assert!(v < 1.5, "{}: {v}", preset.name);
+    }
+    let mut curve = Dish.preset("mug").expect("mug").values;
+    for (i, r) in curve[dish::P_RADIUS..dish::P_RADIUS + 9]
+        .iter_mut()
+        .enumerate()
+    {
+        *r = 3.0 + 0.2 * i as f64 + 0.03 * (i * i) as f64;
+    }
+    assert!(Dish.shape_prior(&curve).0 < 1e-12, "a steady curve");
+    let tea_cup = Dish.preset("tea_cup").expect("tea_cup").values;
+    let mut stepped = tea_cup.clone();
+    stepped[dish::P_RADIUS..dish::P_RADIUS + 9]
+        .copy_from_slice(&[3.0, 3.0, 3.0, 3.0, 4.8, 4.9, 5.0, 5.1, 5.2]);
+    let mug = Dish.preset("mug").expect("mug").values;
+    let mut on_a_foot = mug.clone();
+    on_a_foot[dish::P_RADIUS] = 2.0;
+    for (what, p, smooth) in [
+        ("stepped", stepped, &tea_cup),
+        ("on a foot", on_a_foot, &mug),
+    ] {
+        let (v, s) = (Dish.shape_prior(&p).0, Dish.shape_prior(smooth).0);
+        assert!(v > s + 1.0, "{what}: {v} against {s}");
     }
 }
 

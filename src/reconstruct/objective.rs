@@ -166,6 +166,7 @@ pub struct FitObjective {
     layout: Layout,
     masks: Vec<Mask>,
     reg_weight: f64,
+    prior_weight: f64,
     parallel_render: bool,
     topologies: TopologyCache,
     windows: Option<Arc<WindowTerm>>,
@@ -190,11 +191,19 @@ impl FitObjective {
             layout,
             masks,
             reg_weight,
+            prior_weight: 0.0,
             parallel_render,
             topologies: TopologyCache::default(),
             windows: None,
             rim: None,
         }
+    }
+
+    /// Adds the generator's shape prior ([`Generator::shape_prior`]) at `weight` (relative to
+    /// the MSE); without it, none.
+    pub fn with_shape_prior(mut self, weight: f64) -> FitObjective {
+        self.prior_weight = weight;
+        self
     }
 
     /// Adds the window term ([`super::windows`]): its value counts, its gradient is zero.
@@ -345,12 +354,17 @@ impl FitObjective {
                 layout.view_vars(x, v).view(w, h)
             })?;
         }
-        if self.reg_weight > 0.0 {
-            let (r, rg) = self.generator.regularizer(gen_x);
-            loss += self.reg_weight * r;
-            if let Some(g) = grad {
-                for (gi, ri) in g.iter_mut().zip(rg) {
-                    *gi += self.reg_weight * ri;
+        for (weight, penalty) in [
+            (self.reg_weight, Generator::regularizer as fn(_, _) -> _),
+            (self.prior_weight, Generator::shape_prior),
+        ] {
+            if weight > 0.0 {
+                let (r, rg) = penalty(self.generator, gen_x);
+                loss += weight * r;
+                if let Some(g) = grad.as_deref_mut() {
+                    for (gi, ri) in g.iter_mut().zip(rg) {
+                        *gi += weight * ri;
+                    }
                 }
             }
         }

@@ -313,6 +313,7 @@ impl Run {
             self.config.reg_weight,
             true,
         )
+        .with_shape_prior(self.config.prior_weight)
         .with_windows(self.windows.clone())
         .with_rim(self.rim[i].clone());
         let domain = search.memetic.domain().clone();
