@@ -193,6 +193,14 @@ fn bad_masks_are_refused_with_a_message() {
         "budget",
     );
     check(
+        vec![ok.clone()],
+        FitConfig {
+            prior_weight: f64::NAN,
+            ..config(1, 1.0)
+        },
+        "shape prior",
+    );
+    check(
         vec![ok],
         FitConfig {
             fov_y: vec![Some(-1.0)],

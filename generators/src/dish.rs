@@ -38,7 +38,7 @@
 //! segment, 2·q segments on the rim, corner and handle cross-section (6·q points), and the 20
 //! handle steps at every level (they are parameters).
 
-use crate::ad::Scalar;
+use crate::ad::{Scalar, Var};
 use crate::build::{Builder, Model, generate, generate_with_vjp};
 use crate::{EdgeRing, GenError, Generator, Lod, Mesh, ParamKind, ParamSpec, Part, Preset, Vjp};
 use glam::Vec2;
@@ -700,10 +700,11 @@ fn lathe_vertex(first: usize, n: usize, j: usize, s: usize) -> u32 {
 /// lip with a flat top (real mugs and espresso cups: 4–5 mm) it is the inner edge from every
 /// camera above the rim. Measured on the Mitsuba photos (mean IoU-64 over the twelve, lens
 /// known, seeds 0 / 1 / 2, without the shape prior): the inner top 0.916 / 0.910 / 0.923, the
-/// apex (`20·q`, before) 0.912 / 0.910 / 0.902. With a saucer, the cup's foot too, where the cup meets the
-/// saucer in a photo from above: the outer wall's first point (`3·q`), or where the wall turns to
-/// face the camera between it and the next point up (a belly hides the foot); seen inside the
-/// saucer rim's top (the saucer's profile point 5, its lathe after the body's and the handle's
+/// apex (`20·q`, before) 0.912 / 0.910 / 0.902.
+///
+/// With a saucer, the cup's foot too, where the cup meets the saucer in a photo from above: the
+/// outer wall's first point (`3·q`), or where the wall turns to face the camera between it and
+/// the next point up (a belly hides the foot); seen inside the saucer rim's top (the saucer's profile point 5, its lathe after the body's and the handle's
 /// vertices). Measured on the Mitsuba photos' three cups on saucers over seeds 0–7 (mean IoU-64;
 /// 0.850 without the foot): this 0.863; the foot alone, skipped where the wall does not face
 /// the camera, 0.866; the contour searched from the corner's bottom (`q`) to `9·q` 0.861, from
@@ -874,7 +875,6 @@ fn handle<S: Scalar>(b: &mut Builder<S>, p: &[S], wall: &Wall<S>, height: S, nm:
 /// vases do narrow), a rim more than three times wider than the base, and jumpy handle radii
 /// and thickness multipliers (only when there is a handle). Written over [`Scalar`] so its
 /// gradient comes from the tape.
-///
 pub fn regularizer<S: Scalar>(p: &[S]) -> S {
     let mut v = S::cst(0.0);
     for i in 0..8 {
@@ -908,6 +908,19 @@ pub fn kink_prior<S: Scalar>(p: &[S]) -> S {
         v = v + kink * kink;
     }
     v
+}
+
+/// A penalty over the dish's parameters and its gradient in the continuous ones, from the tape.
+/// A vector the generator would refuse has no meaningful penalty (0, no gradient); the caller
+/// gets the error from `generate`.
+fn penalty(params: &[f64], f: fn(&[Var]) -> Var) -> (f64, Vec<f64>) {
+    match crate::sanitize_params(spec(), params) {
+        Ok(p) => {
+            let active: Vec<bool> = spec().iter().map(|s| s.kind.is_continuous()).collect();
+            crate::ad::gradient(&p, &active, f)
+        }
+        Err(_) => (0.0, vec![0.0; params.len()]),
+    }
 }
 
 impl Generator for Dish {
@@ -996,8 +1009,9 @@ impl Generator for Dish {
         (out, P_HAS_SAUCER..N_PARAMS)
     }
 
-    /// Where the rounded rim meets the inner wall, and with a saucer the cup's foot (or just above it, where the
-    /// wall turns to face the camera), seen inside the saucer's rim (see [`edge_rings`]).
+    /// Where the rounded rim meets the inner wall, and with a saucer the cup's foot (or just
+    /// above it, where the wall turns to face the camera), seen inside the saucer's rim (see
+    /// [`edge_rings`]).
     fn edge_rings(&self, params: &[f64], lod: Lod) -> Vec<EdgeRing> {
         edge_rings(params, lod)
     }
@@ -1035,24 +1049,10 @@ impl Generator for Dish {
     }
 
     fn regularizer(&self, params: &[f64]) -> (f64, Vec<f64>) {
-        match crate::sanitize_params(spec(), params) {
-            Ok(p) => {
-                let active: Vec<bool> = spec().iter().map(|s| s.kind.is_continuous()).collect();
-                crate::ad::gradient(&p, &active, regularizer)
-            }
-            // A vector the generator would refuse has no meaningful penalty; the caller gets
-            // the error from `generate`.
-            Err(_) => (0.0, vec![0.0; params.len()]),
-        }
+        penalty(params, regularizer)
     }
 
     fn shape_prior(&self, params: &[f64]) -> (f64, Vec<f64>) {
-        match crate::sanitize_params(spec(), params) {
-            Ok(p) => {
-                let active: Vec<bool> = spec().iter().map(|s| s.kind.is_continuous()).collect();
-                crate::ad::gradient(&p, &active, kink_prior)
-            }
-            Err(_) => (0.0, vec![0.0; params.len()]),
-        }
+        penalty(params, kink_prior)
     }
 }

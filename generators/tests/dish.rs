@@ -616,28 +616,7 @@ fn regularizer_gradient_matches_finite_differences() {
     for _ in 0..20 {
         let mut p = random_params(&Dish, &mut rng);
         p[dish::P_HAS_HANDLE] = 1.0;
-        let (v, g) = Dish.regularizer(&p);
-        assert!(v >= 0.0);
-        for (i, s) in Dish.params().iter().enumerate() {
-            if !s.kind.is_continuous() {
-                continue;
-            }
-            let h = 1e-6;
-            let mut a = p.clone();
-            let mut b = p.clone();
-            a[i] += h;
-            b[i] -= h;
-            if a[i] > s.max || b[i] < s.min {
-                continue;
-            }
-            let fd = (Dish.regularizer(&a).0 - Dish.regularizer(&b).0) / (2.0 * h);
-            assert!(
-                (fd - g[i]).abs() < 1e-5 * (1.0 + fd.abs()),
-                "{}: {fd} vs {}",
-                s.name,
-                g[i]
-            );
-        }
+        penalty_gradient_matches_finite_differences(|p| Dish.regularizer(p), &p);
     }
     // The penalties fire where the notes say: a narrowing profile, a rim > 3× the base, a
     // jumpy handle. A straight mug with a smooth handle costs nothing.
@@ -668,24 +647,7 @@ fn the_shape_prior_finds_kinks_in_the_wall() {
     let mut rng = Rng::new(12);
     for _ in 0..20 {
         let p = random_params(&Dish, &mut rng);
-        let (v, g) = Dish.shape_prior(&p);
-        assert!(v >= 0.0);
-        for (i, s) in Dish.params().iter().enumerate() {
-            let h = 1e-6;
-            let (mut a, mut b) = (p.clone(), p.clone());
-            a[i] += h;
-            b[i] -= h;
-            if !s.kind.is_continuous() || a[i] > s.max || b[i] < s.min {
-                continue;
-            }
-            let fd = (Dish.shape_prior(&a).0 - Dish.shape_prior(&b).0) / (2.0 * h);
-            assert!(
-                (fd - g[i]).abs() < 1e-5 * (1.0 + fd.abs()),
-                "{}: {fd} vs {}",
-                s.name,
-                g[i]
-            );
-        }
+        penalty_gradient_matches_finite_differences(|p| Dish.shape_prior(p), &p);
     }
     for preset in Dish.presets() {
         let (v, _) = Dish.shape_prior(&preset.values);
@@ -712,6 +674,32 @@ fn the_shape_prior_finds_kinks_in_the_wall() {
     ] {
         let (v, s) = (Dish.shape_prior(&p).0, Dish.shape_prior(smooth).0);
         assert!(v > s + 1.0, "{what}: {v} against {s}");
+    }
+}
+
+/// A penalty of the dish (value, gradient) at `p`: non-negative, and its gradient in every
+/// continuous parameter within 1e-5 (relative) of central differences that stay in range.
+fn penalty_gradient_matches_finite_differences(
+    penalty: impl Fn(&[f64]) -> (f64, Vec<f64>),
+    p: &[f64],
+) {
+    let (v, g) = penalty(p);
+    assert!(v >= 0.0);
+    for (i, s) in Dish.params().iter().enumerate() {
+        let h = 1e-6;
+        let (mut a, mut b) = (p.to_vec(), p.to_vec());
+        a[i] += h;
+        b[i] -= h;
+        if !s.kind.is_continuous() || a[i] > s.max || b[i] < s.min {
+            continue;
+        }
+        let fd = (penalty(&a).0 - penalty(&b).0) / (2.0 * h);
+        assert!(
+            (fd - g[i]).abs() < 1e-5 * (1.0 + fd.abs()),
+            "{}: {fd} vs {}",
+            s.name,
+            g[i]
+        );
     }
 }
 

@@ -61,12 +61,12 @@ pub struct FitConfig {
     /// 0.01 (`cargo test --release --test reconstruct -- --ignored --nocapture` prints the
     /// table for the defaults).
     pub search_reg_weight: f64,
-    /// Weight of the generator's shape prior ([`Generator::shape_prior`](crate::generators::Generator::shape_prior))
-    /// in stages 2 and 3 (relative to the MSE); stage 1 leaves it out. Measured on the Mitsuba
-    /// dish photos (mean IoU-64, lens known, seeds 0 / 1 / 2): 0 → 0.916 / 0.910 / 0.923, 1e-4
-    /// 0.919 / 0.921 / 0.918, 1e-3 0.928 / 0.923 / 0.910; in stage 1 too (at its regulariser's
-    /// 1e-2) 0.933 / 0.934 / 0.944, but the measured mug from masks (12 cameras) fell from 0.969
-    /// (worst 0.952) to 0.944 (0.890); with 1e-4 in stages 2 and 3 only, 0.964 (0.934).
+    /// Weight of the generator's shape prior ([`Generator::shape_prior`]) in stages 2 and 3
+    /// (relative to the MSE); stage 1 leaves it out. Measured on the Mitsuba dish photos (mean
+    /// IoU-64, lens known, seeds 0 / 1 / 2): 0 → 0.916 / 0.910 / 0.923, 1e-4 0.919 / 0.921 /
+    /// 0.918, 1e-3 0.928 / 0.923 / 0.910; in stage 1 too (at its regulariser's 1e-2) 0.933 /
+    /// 0.934 / 0.944, but the measured mug from masks (12 cameras) fell from 0.969 (worst 0.952)
+    /// to 0.944 (0.890); with 1e-4 in stages 2 and 3 only, 0.964 (0.934).
     pub prior_weight: f64,
     /// Whole fits (all three stages) from different seeds, stepped side by side; the one with
     /// the lowest final loss is the result. Single-view fits land in different basins from run to run (a handle
@@ -215,6 +215,9 @@ impl FitConfig {
         }
         if !(config.reg_weight.is_finite() && config.reg_weight >= 0.0) {
             return Err(FitError("the regulariser weight must be ≥ 0".into()));
+        }
+        if !(config.prior_weight.is_finite() && config.prior_weight >= 0.0) {
+            return Err(FitError("the shape prior's weight must be ≥ 0".into()));
         }
         if config.resolutions.iter().any(|&r| !(8..=4096).contains(&r)) {
             return Err(FitError("stage resolutions must be within 8..=4096".into()));
