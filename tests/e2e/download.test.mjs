@@ -28,11 +28,13 @@ after(async () => {
 /** Chooses `format` in the menu, clicks Download and collects `count` downloads. */
 async function downloadAs(format, count = 1) {
   await page.selectOption('#download-format', format);
-  const files = [];
+  // In the order the page started them: each download's bytes arrive when they arrive (a
+  // small MTL can be saved before the OBJ that came first), so the reads are awaited together.
+  const started = [];
   const done = new Promise((resolve) => {
-    page.on('download', async function onDownload(dl) {
-      files.push({ name: dl.suggestedFilename(), bytes: readFileSync(await dl.path()) });
-      if (files.length === count) {
+    page.on('download', function onDownload(dl) {
+      started.push(dl.path().then((path) => ({ name: dl.suggestedFilename(), bytes: readFileSync(path) })));
+      if (started.length === count) {
         page.off('download', onDownload);
         resolve();
       }
@@ -40,7 +42,7 @@ async function downloadAs(format, count = 1) {
   });
   await page.click('#download-as');
   await done;
-  return files;
+  return Promise.all(started);
 }
 
 const parse = (bytes) => new GLTFLoader().parseAsync(bytes.buffer.slice(bytes.byteOffset, bytes.byteOffset + bytes.byteLength), '');
