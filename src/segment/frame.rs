@@ -77,9 +77,9 @@ pub(super) fn crossed_sides(colors: &[Rgb], w: usize, h: usize) -> [bool; 4] {
         // reached without a jump is background, whatever its colour. Without this, three of
         // the building benchmark's ten photos on a gradient (sky, then grass) said the
         // building ran off the left and right edges.
-        let reached = smooth_from_ends(&profile, thr);
         // The longest stretch of "other" positions, gaps of up to 2 % bridged.
         let gap = (len / 50).max(1);
+        let reached = smooth_from_ends(&profile, thr, gap);
         let (mut best, mut start, mut last) = ((0, 0), None::<usize>, 0);
         for (t, &c) in profile.iter().enumerate().take(len - e).skip(e) {
             if !reached[t] && other(c, t) {
@@ -115,26 +115,38 @@ const RUNNING: usize = 5;
 
 /// The positions of `profile` reached from either end by steps of less than `thr` from the
 /// running mean of the last [`RUNNING`] samples reached: a background's slow change (a
-/// gradient, the ground below a horizon) is followed, an object's edge stops the walk.
-fn smooth_from_ends(profile: &[Rgb], thr: f32) -> Vec<bool> {
+/// gradient, the ground below a horizon) is followed, an object's edge stops the walk. A
+/// thin line across the background (a seam between a table's planks) is stepped over: the
+/// walk goes on when the background's colour is back within `gap` samples.
+fn smooth_from_ends(profile: &[Rgb], thr: f32, gap: usize) -> Vec<bool> {
     let len = profile.len();
     let mut reached = vec![false; len];
-    let mut walk = |order: &mut dyn Iterator<Item = usize>| {
+    for forward in [true, false] {
+        let at = |k: usize| if forward { k } else { len - 1 - k };
         let mut recent: Vec<Rgb> = Vec::with_capacity(RUNNING);
-        for t in order {
-            let c = profile[t];
-            if !recent.is_empty() && dist(c, mean(&recent)) >= thr {
-                break;
+        let mut k = 0;
+        while k < len {
+            if !recent.is_empty() {
+                let m = mean(&recent);
+                // The next sample within the gap that is the background's colour again.
+                let Some(back) =
+                    (k..(k + gap + 1).min(len)).find(|&j| dist(profile[at(j)], m) < thr)
+                else {
+                    break;
+                };
+                for j in k..back {
+                    reached[at(j)] = true;
+                }
+                k = back;
             }
-            reached[t] = true;
+            reached[at(k)] = true;
             if recent.len() == RUNNING {
                 recent.remove(0);
             }
-            recent.push(c);
+            recent.push(profile[at(k)]);
+            k += 1;
         }
-    };
-    walk(&mut (0..len));
-    walk(&mut (0..len).rev());
+    }
     reached
 }
 
@@ -179,6 +191,23 @@ mod tests {
             } else {
                 let t = (y - 60) as f32 / 90.0;
                 [0.45 - 0.1 * t + n, 0.55 - 0.1 * t + n, 0.38 - 0.08 * t + n]
+            }
+        });
+        assert_eq!(crossed_sides(&img, 200, 150), [false; 4]);
+    }
+
+    #[test]
+    fn plank_seams_cross_nothing() {
+        // A table of planks with dark seams every 15 rows (none at the ends), lit by a lamp so its middle rows
+        // are brighter than either end of a side: each side's walk must step over the seams
+        // to follow the light's smooth change, or the lit middle is "an object".
+        let img = image(200, 150, |x, y| {
+            let d = (y as f32 - 75.0) / 35.0;
+            let lit = 0.3 * (-d * d).exp() - 0.02 * x as f32 / 200.0;
+            if (15..135).contains(&y) && y % 15 < 2 {
+                [0.25, 0.15, 0.08]
+            } else {
+                [0.45 + lit, 0.3 + lit, 0.15 + 0.6 * lit]
             }
         });
         assert_eq!(crossed_sides(&img, 200, 150), [false; 4]);
