@@ -164,9 +164,37 @@ impl LabelRenderer {
         let y0 = ((lo.y - 0.5).ceil().max(0.0) as i64).min(sh);
         let y1 = ((hi.y - 0.5).floor().min((sh - 1) as f64) as i64).max(-1);
         let inv_area = 1.0 / area;
+        // Each barycentric weight is linear in the sample's x along a row: its slope, so that
+        // a row's samples outside the triangle are skipped without being tested. The span is
+        // widened by a sample each side against rounding; the test inside it is the exact one,
+        // so which samples are drawn does not depend on the span.
+        let slopes = [
+            (b.y - c.y) * inv_area,
+            (c.y - a.y) * inv_area,
+            (a.y - b.y) * inv_area,
+        ];
         for y in y0..=y1 {
             let py = y as f64 + 0.5;
-            for x in x0..=x1 {
+            let (mut k0, mut k1) = (x0, x1);
+            let px = x0 as f64 + 0.5;
+            let p = DVec2::new(px, py);
+            let wa = (b - p).perp_dot(c - p) * inv_area;
+            let wb = (c - p).perp_dot(a - p) * inv_area;
+            for (w, s) in [wa, wb, 1.0 - wa - wb].into_iter().zip(slopes) {
+                // w(X) = w + s (X − px) ≥ 0.
+                if s > 0.0 {
+                    let lo = (px - w / s - 0.5).ceil() - 1.0;
+                    if lo.is_finite() && lo > k0 as f64 {
+                        k0 = lo.min(x1 as f64 + 1.0) as i64;
+                    }
+                } else if s < 0.0 {
+                    let hi = (px - w / s - 0.5).floor() + 1.0;
+                    if hi.is_finite() && hi < k1 as f64 {
+                        k1 = hi.max(x0 as f64 - 1.0) as i64;
+                    }
+                }
+            }
+            for x in k0..=k1 {
                 let p = DVec2::new(x as f64 + 0.5, py);
                 // Barycentric weights with the triangle's own orientation; both orientations
                 // are drawn (no culling).
@@ -275,6 +303,91 @@ mod tests {
             .render(&m2.positions, &m2.triangles, &m2.tri_parts, 2, &view(32))
             .unwrap();
         assert!(cov2[n..].iter().all(|&c| c == 0.0));
+    }
+
+    /// Every sample tested against every triangle, nearest wins: what [`LabelRenderer::render`]
+    /// draws, without its per-row spans.
+    fn brute_force(r: &LabelRenderer, tris: &[([DVec2; 3], [f64; 3], u8)]) -> Vec<u8> {
+        let (sw, sh) = ((r.width * r.ss) as usize, (r.height * r.ss) as usize);
+        let mut depth = vec![0.0f32; sw * sh];
+        let mut label = vec![255u8; sw * sh];
+        for &([a, b, c], [za, zb, zc], l) in tris {
+            let area = (b - a).perp_dot(c - a);
+            if area == 0.0 {
+                continue;
+            }
+            for y in 0..sh {
+                for x in 0..sw {
+                    let p = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
+                    let wa = (b - p).perp_dot(c - p) * (1.0 / area);
+                    let wb = (c - p).perp_dot(a - p) * (1.0 / area);
+                    let wc = 1.0 - wa - wb;
+                    if wa < 0.0 || wb < 0.0 || wc < 0.0 {
+                        continue;
+                    }
+                    let iz = (wa * za + wb * zb + wc * zc) as f32;
+                    if iz > depth[y * sw + x] {
+                        depth[y * sw + x] = iz;
+                        label[y * sw + x] = l;
+                    }
+                }
+            }
+        }
+        label
+    }
+
+    #[test]
+    fn row_spans_draw_the_samples_every_test_would() {
+        // Random triangles (thin slivers, huge ones past the frame, both orientations, shared
+        // edges) straight in sub-sample units: the spans must skip no sample inside a triangle.
+        let mut r = LabelRenderer::new(24, 20, 3).unwrap();
+        let mut state = 12_345u64;
+        let mut rnd = move || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for round in 0..40 {
+            let mut tris = Vec::new();
+            for t in 0..12u8 {
+                let spread = if round % 3 == 0 { 160.0 } else { 80.0 };
+                let mut pt = || DVec2::new(rnd() * spread - 10.0, rnd() * spread - 10.0);
+                let a = pt();
+                let (b, c) = if t % 4 == 0 {
+                    // A sliver: the third corner nearly on the first edge.
+                    let b = pt();
+                    (b, a.lerp(b, 0.7) + DVec2::new(0.05, -0.03))
+                } else if t % 4 == 1 {
+                    // Integer and half-integer corners: samples exactly on edges.
+                    let q = |v: DVec2| (v * 2.0).round() / 2.0;
+                    (q(pt()), q(pt()))
+                } else {
+                    (pt(), pt())
+                };
+                let a = if t % 4 == 1 {
+                    (a * 2.0).round() / 2.0
+                } else {
+                    a
+                };
+                tris.push(([a, b, c], [rnd() + 0.1, rnd() + 0.1, rnd() + 0.1], t % 3));
+            }
+            r.screen = tris.iter().flat_map(|t| t.0).collect();
+            r.inv_z = tris.iter().flat_map(|t| t.1).collect();
+            r.inv_depth.fill(0.0);
+            r.label.fill(0);
+            for (i, t) in tris.iter().enumerate() {
+                let i = 3 * i as u32;
+                r.raster([i, i + 1, i + 2], t.2);
+            }
+            let drawn: Vec<u8> = r
+                .inv_depth
+                .iter()
+                .zip(&r.label)
+                .map(|(&d, &l)| if d > 0.0 { l } else { 255 })
+                .collect();
+            assert_eq!(drawn, brute_force(&r, &tris), "round {round}");
+        }
     }
 
     #[test]
