@@ -18,7 +18,9 @@
 //! `AGREEMENT_LEVEL` the CLI and the page warn that the mask does not fix the shape, and the
 //! last line says how the warned fits score against the others.
 //! `-- --save DIR` also writes each case's photos and masks there as PNG; `-- --each` prints
-//! every run of each fit (loss, tie prior, IoU-64, main shape parameters) after its row.
+//! every run of each fit (loss, tie prior, IoU-64, main shape parameters) after its row;
+//! `-- --windows` fits each photo with the window labels found in it, as the page's "Find
+//! windows" gives them (the fit's window term and layout search: about 40× the time).
 
 use procfit::bench_cases::BenchFit;
 use procfit::building_bench::{
@@ -73,10 +75,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let wanted = |n: &str| names.is_empty() || names.iter().any(|x| x == n);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
     println!(
-        "## Independent building benchmark, 2 threads, quality {}, seed {}, {} runs a fit\n",
+        "## Independent building benchmark, 2 threads, quality {}, seed {}, {} runs a fit{}\n",
         fit.quality,
         fit.seed,
-        fit.runs_for(procfit::generators::building::Building.name())
+        fit.runs_for(procfit::generators::building::Building.name()),
+        if fit.windows {
+            ", photos with the windows found in them"
+        } else {
+            ""
+        }
     );
     println!(
         "| building | kind | input | IoU-64 | photo-view IoU | seconds | ΔE wall / roof | 3D agreement |"

@@ -39,11 +39,16 @@ pub struct BenchFit {
     /// what the page and the CLI make
     /// ([`FitConfig::restarts_for`](crate::reconstruct::FitConfig::restarts_for)).
     pub runs: Option<usize>,
+    /// Buildings: whether a photo's fit also gets the window labels found in it
+    /// ([`crate::segment::windows::detect_windows`]), as the page's "Find windows" gives them;
+    /// by default the fit has the mask only, as the CLI without `--windows`.
+    pub windows: bool,
 }
 
 impl BenchFit {
     /// The settings a benchmark's arguments ask for: `--quick` (quality 0.4, else 1),
-    /// `--seed N` (else the fit's default seed, 0), `--runs N` (else the page's) and `--each`.
+    /// `--seed N` (else the fit's default seed, 0), `--runs N` (else the page's), `--each` and
+    /// `--windows`.
     pub fn from_args(args: &[String]) -> Result<BenchFit, String> {
         let has = |flag: &str| args.iter().any(|a| a == flag);
         let number = |flag: &str| -> Result<Option<u64>, String> {
@@ -64,6 +69,7 @@ impl BenchFit {
             seed: number("--seed")?.unwrap_or(0),
             each: has("--each"),
             runs,
+            windows: has("--windows"),
         })
     }
 
@@ -91,11 +97,19 @@ mod tests {
                 quality: 1.0,
                 seed: 0,
                 each: false,
-                runs: None
+                runs: None,
+                windows: false,
             }
         );
         let f = BenchFit::from_args(&args(&[
-            "--quick", "--seed", "7", "--each", "--runs", "12", "tower",
+            "--quick",
+            "--seed",
+            "7",
+            "--each",
+            "--runs",
+            "12",
+            "--windows",
+            "tower",
         ]))
         .unwrap();
         assert_eq!(
@@ -104,7 +118,8 @@ mod tests {
                 quality: 0.4,
                 seed: 7,
                 each: true,
-                runs: Some(12)
+                runs: Some(12),
+                windows: true,
             }
         );
         assert!(BenchFit::from_args(&args(&["--runs", "0"])).is_err());

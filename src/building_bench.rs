@@ -787,7 +787,7 @@ pub struct BenchScore {
 }
 
 /// Fits `mask` as the CLI does with the building generator (the field of view known) with the
-/// budget and seed of `fit`, and scores it against `truth` seen through `view`; with
+/// budget and seed of `fit` (a photo with the window labels found in it when `fit.windows`), and scores it against `truth` seen through `view`; with
 /// `fit.each`, every run of the fit too ([`BenchScore::runs`]).
 pub fn fit_and_score(
     truth: &Mesh,
@@ -823,7 +823,7 @@ fn fit_scored(
 ) -> Result<BenchScore, FitError> {
     let for_colours = mask.clone();
     let generator = crate::generators::building::Building.name();
-    let config = FitConfig {
+    let mut config = FitConfig {
         generator: generator.into(),
         fov_y: vec![Some(view.params.fov_y)],
         quality: fit.quality,
@@ -831,6 +831,14 @@ fn fit_scored(
         seed: fit.seed,
         ..FitConfig::default()
     };
+    if let (Some(px), true) = (photo, fit.windows) {
+        // The windows the page finds in the photo (its "Find windows"), within the same cut
+        // as `mask` (the segmentation is deterministic).
+        let e = |x: segment::SegmentError| FitError(x.0);
+        let p = Photo::from_rgba(view.width, view.height, px, segment::WORKING_SIDE).map_err(e)?;
+        let seg = segment::segment_auto(&p).map_err(e)?;
+        config.windows = vec![Some(segment::windows::detect_windows(&p, &seg).map_err(e)?)];
+    }
     let mut session = Session::new(config, vec![mask])?;
     let result = session.run()?;
     let agreement = session.agreement()?;

@@ -31,6 +31,7 @@ fn settings(each: bool) -> BenchFit {
         seed: 0,
         each,
         runs: None,
+        windows: false,
     }
 }
 

@@ -198,6 +198,7 @@ fn a_case_loads_and_the_cli_pipeline_scores_it() {
             seed: 0,
             each: true,
             runs: None,
+            windows: false,
         },
     )
     .unwrap();
