@@ -24,7 +24,7 @@ use crate::bench_cases::BenchFit;
 use crate::camera::View;
 use crate::generators::building::idx;
 use crate::generators::{Generator, Lod, Mesh, Part};
-use crate::mask::Mask;
+use crate::mask::{LabelImage, Mask};
 use crate::reconstruct::eval::view_iou;
 use crate::reconstruct::views::ViewVars;
 use crate::reconstruct::{
@@ -737,9 +737,15 @@ pub fn photo(mesh: &Mesh, view: &View, input: Input) -> Result<Vec<u8>, FitError
 /// The mask a user's photo gives: the photo through [`segment::segment_auto`], as the CLI does
 /// (the automatic cut, [`segment::Segmentation::mask`]).
 pub fn segmented(view: &View, rgba: &[u8]) -> Result<Mask, FitError> {
+    Ok(segment_photo(view, rgba)?.1.mask)
+}
+
+/// The photo as the segmentation reads it and its automatic cut.
+fn segment_photo(view: &View, rgba: &[u8]) -> Result<(Photo, segment::Segmentation), FitError> {
     let e = |x: segment::SegmentError| FitError(x.0);
     let p = Photo::from_rgba(view.width, view.height, rgba, segment::WORKING_SIDE).map_err(e)?;
-    Ok(segment::segment_auto(&p).map_err(e)?.mask)
+    let seg = segment::segment_auto(&p).map_err(e)?;
+    Ok((p, seg))
 }
 
 /// The mask of one input of a case: the clean silhouette or a segmented photo.
@@ -787,7 +793,7 @@ pub struct BenchScore {
 }
 
 /// Fits `mask` as the CLI does with the building generator (the field of view known) with the
-/// budget and seed of `fit` (a photo with the window labels found in it when `fit.windows`), and scores it against `truth` seen through `view`; with
+/// budget and seed of `fit`, and scores it against `truth` seen through `view`; with
 /// `fit.each`, every run of the fit too ([`BenchScore::runs`]).
 pub fn fit_and_score(
     truth: &Mesh,
@@ -795,11 +801,12 @@ pub fn fit_and_score(
     mask: Mask,
     fit: BenchFit,
 ) -> Result<BenchScore, FitError> {
-    fit_scored(truth, view, mask, None, fit)
+    fit_scored(truth, view, mask, None, None, fit)
 }
 
 /// [`fit_and_score`] from `input` made of `truth` through `view` ([`input_mask`]), and for a
-/// photo also the part colours measured in it ([`BenchScore::colour_de`]).
+/// photo also the part colours measured in it ([`BenchScore::colour_de`]); with
+/// `fit.windows`, a photo is fitted with the window labels found in it too.
 pub fn fit_and_score_input(
     truth: &Mesh,
     view: &View,
@@ -810,8 +817,13 @@ pub fn fit_and_score_input(
         return fit_and_score(truth, view, true_mask(truth, view)?, fit);
     }
     let px = photo(truth, view, input)?;
-    let mask = segmented(view, &px)?;
-    fit_scored(truth, view, mask, Some(&px), fit)
+    let (p, seg) = segment_photo(view, &px)?;
+    // The windows the page's "Find windows" finds, within the same cut.
+    let windows = match fit.windows {
+        true => Some(segment::windows::detect_windows(&p, &seg).map_err(|x| FitError(x.0))?),
+        false => None,
+    };
+    fit_scored(truth, view, seg.mask, Some(&px), windows, fit)
 }
 
 fn fit_scored(
@@ -819,6 +831,7 @@ fn fit_scored(
     view: &View,
     mask: Mask,
     photo: Option<&[u8]>,
+    windows: Option<LabelImage>,
     fit: BenchFit,
 ) -> Result<BenchScore, FitError> {
     let for_colours = mask.clone();
@@ -831,13 +844,8 @@ fn fit_scored(
         seed: fit.seed,
         ..FitConfig::default()
     };
-    if let (Some(px), true) = (photo, fit.windows) {
-        // The windows the page finds in the photo (its "Find windows"), within the same cut
-        // as `mask` (the segmentation is deterministic).
-        let e = |x: segment::SegmentError| FitError(x.0);
-        let p = Photo::from_rgba(view.width, view.height, px, segment::WORKING_SIDE).map_err(e)?;
-        let seg = segment::segment_auto(&p).map_err(e)?;
-        config.windows = vec![Some(segment::windows::detect_windows(&p, &seg).map_err(e)?)];
+    if let Some(w) = windows {
+        config.windows = vec![Some(w)];
     }
     let mut session = Session::new(config, vec![mask])?;
     let result = session.run()?;

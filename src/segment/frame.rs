@@ -76,10 +76,10 @@ pub(super) fn crossed_sides(colors: &[Rgb], w: usize, h: usize) -> [bool; 4] {
         // a gradient) is followed from each end for as long as it changes smoothly: what is
         // reached without a jump is background, whatever its colour. Without this, three of
         // the building benchmark's ten photos on a gradient (sky, then grass) said the
-        // building ran off the left and right edges.
-        // The longest stretch of "other" positions, gaps of up to 2 % bridged.
+        // building ran off the left and right edges. Thin lines of up to 2 % are stepped over.
         let gap = (len / 50).max(1);
         let reached = smooth_from_ends(&profile, thr, gap);
+        // The longest stretch of "other" positions, gaps of up to 2 % bridged.
         let (mut best, mut start, mut last) = ((0, 0), None::<usize>, 0);
         for (t, &c) in profile.iter().enumerate().take(len - e).skip(e) {
             if !reached[t] && other(c, t) {
@@ -198,9 +198,9 @@ mod tests {
 
     #[test]
     fn plank_seams_cross_nothing() {
-        // A table of planks with dark seams every 15 rows (none at the ends), lit by a lamp so its middle rows
-        // are brighter than either end of a side: each side's walk must step over the seams
-        // to follow the light's smooth change, or the lit middle is "an object".
+        // A table of planks with dark seams every 15 rows (none at the ends), lit by a lamp so
+        // its middle rows are brighter than either end of a side: each side's walk must step
+        // over the seams to follow the light's smooth change, or the lit middle is "an object".
         let img = image(200, 150, |x, y| {
             let d = (y as f32 - 75.0) / 35.0;
             let lit = 0.3 * (-d * d).exp() - 0.02 * x as f32 / 200.0;
