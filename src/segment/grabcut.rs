@@ -137,7 +137,15 @@ impl Session {
     /// Automatic segmentation: border background model, then GrabCut iterations.
     pub fn automatic(photo: &Photo, opts: &Options) -> Result<Session, SegmentError> {
         let mut s = Session::prepare(photo, opts)?;
-        s.crossed = Some(super::frame::crossed_sides(&s.colors, s.w, s.h));
+        let crossed = super::frame::crossed_sides(&s.colors, s.w, s.h);
+        s.crossed = Some(crossed);
+        // A side the others' colours do not explain may still be background: a wall lit warm
+        // from one side and cool from the other, darker towards the floor, differs on every
+        // side. The frame check follows each side along its length: where it finds no object
+        // running off, the side is background whatever the others look like.
+        for (t, c) in s.touched.iter_mut().zip(crossed) {
+            *t &= c;
+        }
         // Hard background: the outermost ring on the sides the object does not touch.
         let (w, h) = (s.w, s.h);
         for x in 0..w {
@@ -602,13 +610,11 @@ impl Session {
                 "the object touches {sides} image borders; the background model may be wrong"
             ));
         }
+        // Sides of the border that differ from each other (a table's far end darker than its
+        // near end) are no sign of a wrong mask by themselves: the frame check looks along
+        // each side for an object running off it. A box or strokes say where the object is.
         if let Some(w) = self.crossed.and_then(|c| frame_warning(&c, &obj, w, h)) {
             warnings.push(w);
-        } else if self.touched.iter().filter(|&&t| t).count() >= 2 {
-            warnings.push(
-                "the image border is not one background: it differs on two or more sides"
-                    .to_owned(),
-            );
         }
         // The cut's own colour models vouch for a mask that took in table: judge it against
         // the photo around it instead. Only for the automatic mask; a mask the user has
