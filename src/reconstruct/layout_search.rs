@@ -8,6 +8,7 @@ use super::objective::FitObjective;
 use super::views::ViewSlot;
 use crate::generators::{ParamKind, ParamSpec};
 use crate::optim::{AdamConfig, Domain, Objective};
+use rayon::prelude::*;
 
 /// Adam iterations that repair the silhouette after a [`window_sweep`] move (15 were too few for
 /// a changed entrance count to grow its stripes back to the outline).
@@ -23,6 +24,9 @@ pub(super) const SWEEP_WORK: f64 = 6000.0;
 
 /// Most passes of [`window_sweep`] (it stops early when a pass gains nothing).
 const SWEEP_PASSES: usize = 3;
+
+/// A point and its loss.
+type Point = (Vec<f64>, f64);
 
 /// Largest number of values a discrete parameter may have to be swept.
 const SWEEP_MAX_VALUES: f64 = 12.0;
@@ -62,60 +66,74 @@ pub(super) fn window_sweep(
             if s.kind.is_continuous() || s.max - s.min >= SWEEP_MAX_VALUES {
                 continue;
             }
-            let mut best: Option<(Vec<f64>, f64)> = None;
-            let mut v = s.min;
-            while v <= s.max + 1e-9 {
-                let old = x[i];
-                v += 1.0;
-                if (v - 1.0 - old).abs() < 0.5 {
-                    continue;
-                }
-                let v = v - 1.0;
-                let mut plain = x.clone();
-                plain[i] = v;
-                domain.clamp(&mut plain);
-                let mut raw = objective.value(&plain);
-                spent += 1;
-                if raw == current {
-                    // The parameter does nothing here.
-                    continue;
-                }
-                let mut cand = plain;
-                if matches!(s.kind, ParamKind::Integer) && old >= 1.0 && v >= 1.0 {
-                    for &j in &metric {
-                        let mut c = x.clone();
-                        c[i] = v;
-                        let want = c[j] * old / v;
-                        let g = specs[j].min.max(want.min(specs[j].max)) / want;
-                        c[j] = want;
-                        if g != 1.0 {
-                            for &k in &metric {
-                                c[k] *= g;
+            // The other values, each tried (and repaired) from the same point: in parallel,
+            // then taken in order, so the result does not depend on the threads. The label
+            // render of the window term is sequential; without this, a run's sweep kept one
+            // core while the other runs had finished theirs.
+            let old = x[i];
+            let values: Vec<f64> = (0..)
+                .map(|k| s.min + k as f64)
+                .take_while(|&v| v <= s.max + 1e-9)
+                .filter(|&v| (v - old).abs() >= 0.5)
+                .collect();
+            let tried: Vec<(Option<Point>, usize)> = values
+                .par_iter()
+                .map(|&v| {
+                    let mut spent = 0;
+                    let mut plain = x.clone();
+                    plain[i] = v;
+                    domain.clamp(&mut plain);
+                    let mut raw = objective.value(&plain);
+                    spent += 1;
+                    if raw == current {
+                        // The parameter does nothing here.
+                        return (None, spent);
+                    }
+                    let mut cand = plain;
+                    if matches!(s.kind, ParamKind::Integer) && old >= 1.0 && v >= 1.0 {
+                        for &j in &metric {
+                            let mut c = x.clone();
+                            c[i] = v;
+                            let want = c[j] * old / v;
+                            let g = specs[j].min.max(want.min(specs[j].max)) / want;
+                            c[j] = want;
+                            if g != 1.0 {
+                                for &k in &metric {
+                                    c[k] *= g;
+                                }
+                                for view in 0..layout.n_views {
+                                    c[layout.slot(view, ViewSlot::LogScale)] -= g.ln();
+                                }
                             }
-                            for view in 0..layout.n_views {
-                                c[layout.slot(view, ViewSlot::LogScale)] -= g.ln();
+                            domain.clamp(&mut c);
+                            let value = objective.value(&c);
+                            spent += 1;
+                            if value < raw {
+                                (cand, raw) = (c, value);
                             }
-                        }
-                        domain.clamp(&mut c);
-                        let value = objective.value(&c);
-                        spent += 1;
-                        if value < raw {
-                            (cand, raw) = (c, value);
                         }
                     }
-                }
-                if raw > SWEEP_HOPELESS * current {
-                    // Too far off for a short repair (measured: winners start within 2× the loss).
-                    continue;
-                }
-                let (ind, evals) = crate::optim::adam_search(objective, domain, &cand, &repair);
-                spent += evals;
-                let (cx, cv) = if ind.value < raw {
-                    (ind.x, ind.value)
-                } else {
-                    (cand, raw)
-                };
-                if cv < best.as_ref().map_or(current, |b| b.1) {
+                    if raw > SWEEP_HOPELESS * current {
+                        // Too far off for a short repair (measured: winners start within 2× the
+                        // loss).
+                        return (None, spent);
+                    }
+                    let (ind, evals) = crate::optim::adam_search(objective, domain, &cand, &repair);
+                    spent += evals;
+                    let found = if ind.value < raw {
+                        (ind.x, ind.value)
+                    } else {
+                        (cand, raw)
+                    };
+                    (Some(found), spent)
+                })
+                .collect();
+            let mut best: Option<Point> = None;
+            for (found, n) in tried {
+                spent += n;
+                if let Some((cx, cv)) = found
+                    && cv < best.as_ref().map_or(current, |b| b.1)
+                {
                     best = Some((cx, cv));
                 }
             }
@@ -151,15 +169,21 @@ fn line_sweep(
         if !s.kind.is_continuous() {
             continue;
         }
+        // In parallel, taken in order (as in `window_sweep`).
+        let tried: Vec<(f64, f64)> = LINE_STEPS
+            .par_iter()
+            .map(|&t| {
+                let mut c = x.to_vec();
+                c[i] = s.min + t * (s.max - s.min);
+                domain.clamp(&mut c);
+                (c[i], objective.value(&c))
+            })
+            .collect();
         let mut best: Option<(f64, f64)> = None;
-        for t in LINE_STEPS {
-            let mut c = x.to_vec();
-            c[i] = s.min + t * (s.max - s.min);
-            domain.clamp(&mut c);
-            let v = objective.value(&c);
+        for (ci, v) in tried {
             spent += 1;
             if v < best.map_or(*current, |b| b.1) {
-                best = Some((c[i], v));
+                best = Some((ci, v));
             }
         }
         if let Some((vi, v)) = best {
