@@ -118,7 +118,9 @@ pub struct Session {
     border_model: Gmm,
     /// Border NLL above which a colour is "not background-like".
     border_tau: f32,
-    /// Sides (top, bottom, left, right) that the object appears to touch.
+    /// Sides (top, bottom, left, right) whose colours the other sides do not explain. Read only
+    /// by [`Session::automatic`], which keeps the outermost ring of every other side, and of
+    /// every side the frame check finds nothing running off, as hard background.
     touched: [bool; 4],
     /// Sides the object seems to run off, from the photo's colours (see `frame`); `None` once
     /// the user has said where the object is (a rectangle, a stroke) or outside automatic mode.
