@@ -677,6 +677,48 @@ fn the_shape_prior_finds_kinks_in_the_wall() {
     }
 }
 
+/// The shape prior's saucer proportion: the tea cup on its saucer (rim 0.24 of the saucer's
+/// radius high, as measured saucers) costs nothing for it; the same saucer half as high costs,
+/// and the prior's gradient raises its rim; twice as wide at the same height costs alike (the
+/// ratio, not the height, is the prior: a saucer keeps its proportions under a small cup).
+#[test]
+fn the_shape_prior_keeps_a_saucer_as_high_as_real_ones() {
+    let cup = Dish.preset("tea_cup_on_saucer").expect("preset").values;
+    let without = |p: &[f64]| {
+        let mut bare = p.to_vec();
+        bare[dish::P_HAS_SAUCER] = 0.0;
+        Dish.shape_prior(&bare).0
+    };
+    let rise = |p: &[f64]| {
+        p[dish::P_SAUCER_HEIGHT] * dish::HEIGHT_UNIT
+            / (p[dish::P_SAUCER_RADIUS] * p[dish::P_RADIUS] * dish::RADIUS_UNIT)
+    };
+    assert!(
+        (rise(&cup) - dish::SAUCER_RISE).abs() < 0.01,
+        "{}",
+        rise(&cup)
+    );
+    assert!(Dish.shape_prior(&cup).0 - without(&cup) < 0.1);
+    let mut flat = cup.clone();
+    flat[dish::P_SAUCER_HEIGHT] *= 0.5;
+    let (v, g) = Dish.shape_prior(&flat);
+    let extra = v - without(&flat);
+    let expected = dish::SAUCER_RISE_WEIGHT * (0.5 * rise(&cup) - dish::SAUCER_RISE).powi(2);
+    assert!(
+        (extra - expected).abs() < 1e-6 * expected,
+        "{extra} against {expected}"
+    );
+    assert!(g[dish::P_SAUCER_HEIGHT] < 0.0, "descent raises the rim");
+    let mut wide = cup.clone();
+    wide[dish::P_SAUCER_RADIUS] *= 2.0;
+    let wide_extra = Dish.shape_prior(&wide).0 - without(&wide);
+    assert!(
+        (wide_extra - extra).abs() < 1e-6 * extra,
+        "{wide_extra} against {extra}"
+    );
+    penalty_gradient_matches_finite_differences(|p| Dish.shape_prior(p), &flat);
+}
+
 /// A penalty of the dish (value, gradient) at `p`: non-negative, and its gradient in every
 /// continuous parameter within 1e-5 (relative) of central differences that stay in range.
 fn penalty_gradient_matches_finite_differences(
