@@ -711,6 +711,19 @@ fn lathe_vertex(first: usize, n: usize, j: usize, s: usize) -> u32 {
 /// the camera, 0.866; the contour searched from the corner's bottom (`q`) to `9·q` 0.861, from
 /// `3·q` to `9·q` 0.851 (a teacup's belly and its shadowed foot are two edges); the foot's
 /// term at half the rim's weight 0.842, at twice 0.863.
+///
+/// Tried and not kept: the inside's floor (the inner corner's middle, `38·q`), every point
+/// of it seen through the rim's opening, where a photo from above shows the floor meet the far
+/// wall. On the six photos that show the floor (lens known, seeds 0 / 1 / 2), the mug from 60°
+/// went 0.892 / 0.833 / 0.888 → 0.741 / 0.805 / 0.756 (fitted too deep: height over rim 1.30–1.42
+/// for 1.19), the serving bowl from 55° 0.881 / 0.941 / 0.930 → 0.657 / 0.667 / 0.813 and the
+/// teacup from 50° 0.944 / 0.949 / 0.942 → 0.887 / 0.811 / 0.895: the glaze's highlights
+/// on the floor are stronger edges than the floor's soft corner. Nor the cup's sides over the
+/// saucer (at the wall's seven inner control heights, the two points around each ring where
+/// the wall turns from facing the camera, seen inside the saucer's rim, weighing one ring all
+/// together): the three cups on saucers (before the saucer's proportion in [`shape_prior`])
+/// 0.878 / 0.856 / 0.874 → 0.880 / 0.823 / 0.871, the espresso cup's runs' losses up by half
+/// (white cup, white saucer: the nearest strong edge is the saucer's well or a shadow).
 pub fn edge_rings(params: &[f64], lod: Lod) -> Vec<EdgeRing> {
     let q = lod_q(lod);
     let n = lathe_sectors(q);
