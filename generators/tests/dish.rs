@@ -677,8 +677,8 @@ fn the_shape_prior_finds_kinks_in_the_wall() {
     }
 }
 
-/// The shape prior's saucer proportion: the tea cup on its saucer (rim 0.24 of the saucer's
-/// radius high, as measured saucers) costs nothing for it; the same saucer half as high costs,
+/// The shape prior's saucer proportion: the tea cup on its saucer (rim 0.244 of the saucer's
+/// radius high, as measured saucers) costs little for it; the same saucer half as high costs,
 /// and the prior's gradient raises its rim; twice as wide at the same height costs alike (the
 /// ratio, not the height, is the prior: a saucer keeps its proportions under a small cup).
 #[test]
