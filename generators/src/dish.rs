@@ -645,6 +645,11 @@ impl Model for Dish {
     }
 }
 
+/// The saucer rim's radius and height in model units, for a body of bottom radius `r0`.
+fn saucer_rim<S: Scalar>(p: &[S], r0: S) -> (S, S) {
+    (p[P_SAUCER_RADIUS] * r0, p[P_SAUCER_HEIGHT] * HEIGHT_UNIT)
+}
+
 /// The saucer's profile, outer pole → rim → inner pole, as (r, y): a foot ring on the ground,
 /// the underside rising to the rim, a rounded rim lip, the top falling to the flat well. Its
 /// radius is `saucer_radius` × the body's bottom radius `r0`, so a cup keeps its saucer when it
@@ -654,8 +659,7 @@ impl Model for Dish {
 /// 0.904 / 0.887 / 0.876.
 fn saucer_profile<S: Scalar>(p: &[S], r0: S) -> Vec<(S, S)> {
     let zero = S::cst(0.0);
-    let r = p[P_SAUCER_RADIUS] * r0;
-    let h = p[P_SAUCER_HEIGHT] * HEIGHT_UNIT;
+    let (r, h) = saucer_rim(p, r0);
     let rw = p[P_SAUCER_WELL] * r;
     // Thickness of the plate: a third of the rim height, at most a wall and a tenth of the
     // radius (so the rim never folds over the well).
@@ -932,9 +936,8 @@ pub fn shape_prior<S: Scalar>(p: &[S]) -> S {
         v = v + kink * kink;
     }
     if p[P_HAS_SAUCER].val() > 0.5 {
-        let rise =
-            p[P_SAUCER_HEIGHT] * (HEIGHT_UNIT / RADIUS_UNIT) / (p[P_SAUCER_RADIUS] * p[P_RADIUS]);
-        let d = rise - SAUCER_RISE;
+        let (r, h) = saucer_rim(p, p[P_RADIUS] * RADIUS_UNIT);
+        let d = h / r - SAUCER_RISE;
         v = v + d * d * SAUCER_RISE_WEIGHT;
     }
     v
