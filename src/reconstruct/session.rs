@@ -104,8 +104,8 @@ pub struct Session {
 /// Other tie-breaks for the mug, measured by re-picking among the same runs (`cargo bench
 /// --bench reconstruct -- mug --cameras 96 --each`, every run's loss, parameters and IoU-64;
 /// with this rule mean IoU-64 0.947, worst 0.808, 9 of 96 below 0.90; the best run of each tie
-/// would give 0.966): a wider tie (8 %, 10 %) 0.949 / 0.947, worst 0.808 both; adding the
-/// handle's tilt (its end radii apart) or its top–bottom asymmetry to the pinch, 0.935–0.947;
+/// would give 0.965): a wider tie (8 %, 10 %) 0.949 / 0.947, worst 0.808 both; adding the
+/// handle's tilt (its end radii apart) or its top–bottom asymmetry to the pinch, 0.936–0.949;
 /// adding its size (mean sweep radius × thickness × section scale, × 10) 0.956, worst 0.816,
 /// but × 20 fell to 0.935 (the size only happens to be nearest the truth's for the runs that
 /// are right: a prior tuned to this one mug's handle, not a property of real ones). On the
