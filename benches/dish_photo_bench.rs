@@ -24,7 +24,8 @@
 //! ([`procfit::dish_photo_bench::rim_aspect`]); with `PROCFIT_DISH_DUMP=DIR` in the
 //! environment each fit's parameters are written to `DIR/NAME.params` (name and value a line, then
 //! `loss` and the fit's final loss). `-- --each` prints every run of each fit on stderr (loss,
-//! tie prior, IoU-64, elevation, height over rim diameter; the kept one marked).
+//! tie prior, IoU-64, elevation, height over rim diameter, the parameters; the kept one marked):
+//! enough to re-apply another choice among the runs to the same runs without fitting again.
 
 use procfit::bench_cases::{BenchFit, case_dirs};
 use procfit::dish_photo_bench::{BenchCase, auto_segmentation, fit_case, truth_check};
@@ -152,7 +153,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     );
                     for (k, r) in s.runs.iter().enumerate() {
                         eprintln!(
-                            "    {} run {k}{}: loss {:.3e}, tie prior {:.3}, IoU-64 {:.3}, elevation {:.0}°, height/rim {:.2}, photo-view IoU {:.4}, against the hard cut {:.4}, IoU-64 against the kept run {:.3}",
+                            "    {} run {k}{}: loss {:.6e}, tie prior {:.3}, IoU-64 {:.3}, elevation {:.0}°, height/rim {:.2}, photo-view IoU {:.4}, against the hard cut {:.4}, IoU-64 against the kept run {:.3}, params {:?}",
                             c.name,
                             if r.kept { " (kept)" } else { "" },
                             r.loss,
@@ -162,7 +163,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                             r.aspect,
                             r.photo_iou,
                             r.cut_iou,
-                            r.agreement
+                            r.agreement,
+                            r.params
                         );
                     }
                     let row = [s.mask_iou, s.iou64, s.photo_iou, secs];

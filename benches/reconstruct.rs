@@ -5,8 +5,10 @@
 //! `-- WORD …` runs only the objects whose name contains one of the words (`-- building`);
 //! `-- --threads N` runs one thread count only; `-- --cameras N` fits N cameras (4);
 //! `-- --each` prints a line per camera (its yaw and elevation, the IoU-64 and the fitted
-//! parameters) and per run (loss, tie prior, fitted yaw, IoU-64, IoU-64 against the kept run); `-- --fill-holes` fills the
-//! masks' holes (a mug handle's) before fitting, to measure what the hole tells the fit.
+//! parameters) and per run (loss, tie prior, fitted yaw and elevation, IoU-64, IoU-64 against
+//! the kept run, the parameters: enough to re-apply another choice among the runs to the same
+//! runs without fitting again); `-- --fill-holes` fills the masks' holes (a mug handle's)
+//! before fitting, to measure what the hole tells the fit.
 #![allow(
     clippy::unwrap_used,
     clippy::expect_used,
@@ -121,12 +123,14 @@ fn main() {
                         for (k, run) in session.run_results().into_iter().enumerate() {
                             let Some(run) = run else { continue };
                             eprintln!(
-                                "    run {k}: loss {:.5}, tie prior {:.3}, fitted yaw {:.0}°, IoU-64 {:.3}, against the kept run {:.3}",
+                                "    run {k}: loss {:.6e}, tie prior {:.3}, fitted yaw {:.0}°, elevation {:.1}°, IoU-64 {:.3}, against the kept run {:.3}, params {:?}",
                                 run.loss,
                                 run.model.generator.tie_prior(&run.model.params),
                                 run.views[0].params.yaw.to_degrees(),
+                                run.views[0].params.pitch.to_degrees(),
                                 fit_iou64(run, mesh, truth),
-                                procfit::reconstruct::eval::fit_agreement(&r, run, 128).unwrap()
+                                procfit::reconstruct::eval::fit_agreement(&r, run, 128).unwrap(),
+                                run.model.params
                             );
                         }
                     }

@@ -257,6 +257,9 @@ pub struct RunScore {
     pub agreement: f64,
     /// Whether the fit kept it.
     pub kept: bool,
+    /// Its generator parameters: with the loss, the tie prior and the IoU-64, enough to try
+    /// another choice among the runs without fitting again.
+    pub params: Vec<f64>,
 }
 
 /// A mesh's height over the diameter of its rim (the widest circle among its top 3 % in
@@ -377,6 +380,7 @@ pub fn fit_case(
                 elevation_deg: s.elevation_deg,
                 aspect: s.aspect,
                 kept: run.loss == result.loss && run.model.params == result.model.params,
+                params: run.model.params.clone(),
             });
         }
     }
