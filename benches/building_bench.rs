@@ -8,9 +8,9 @@
 //! `../shared/data/paper/building_test_2_original.obj` beside the checkout; it has no licence
 //! and is read from there, never copied), its masks from three cameras are fitted too.
 //!
-//! `cargo bench --bench building_bench` runs everything; `-- --quick` at quality 0.4;
-//! `-- --seed N` fits with seed N (0 by default: judge a change over several seeds); `-- --runs N`
-//! makes N runs a fit (the page's number by default);
+//! `cargo bench --bench building_bench` runs everything; `-- --quick` at quality 0.4,
+//! `-- --quality Q` at Q; `-- --seed N` fits with seed N (0 by default: judge a change over
+//! several seeds); `-- --runs N` makes N runs a fit (the page's number by default);
 //! `-- NAME …` only those cases (`paper` for the paper's building); `-- --inputs mask,plain`
 //! only those inputs; `-- --paper-obj PATH` reads the paper's building from elsewhere;
 //! The *3D agreement* column is what the CLI prints after a fit: how alike the runs that match
@@ -54,7 +54,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     while let Some(a) = it.next() {
         match a.as_str() {
             // Read by `BenchFit::from_args`.
-            "--seed" | "--runs" => {
+            "--seed" | "--runs" | "--quality" => {
                 it.next();
             }
             "--save" => save = Some(PathBuf::from(it.next().ok_or("--save needs a folder")?)),

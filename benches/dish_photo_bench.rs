@@ -8,9 +8,9 @@
 //! saucer was fitted, the wall time on 2 threads and the CLI's warnings; then the means.
 //! See [`procfit::dish_photo_bench`].
 //!
-//! `cargo bench --bench dish_photo_bench` runs everything; `-- --quick` at quality 0.4;
-//! `-- --seed N` fits with seed N (0 by default: judge a change over several seeds); `-- --runs N`
-//! makes N runs a fit (the page's number by default);
+//! `cargo bench --bench dish_photo_bench` runs everything; `-- --quick` at quality 0.4,
+//! `-- --quality Q` at Q; `-- --seed N` fits with seed N (0 by default: judge a change over
+//! several seeds); `-- --runs N` makes N runs a fit (the page's number by default);
 //! `-- --fov known` or `-- --fov unknown` only that row; `-- --threads N`; `-- NAME …` only
 //! those cases; `-- --dir DIR` reads another folder; `-- --save DIR` writes each case's
 //! automatic mask there (`NAME-auto.png`, the hard cut) beside the true one (`NAME-true.png`);
@@ -46,7 +46,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         match a.as_str() {
             "--dir" => dir = PathBuf::from(it.next().ok_or("--dir needs a folder")?),
             // Read again by the `--masks` branch, and by `BenchFit::from_args`.
-            "--check" | "--seed" | "--runs" => {
+            "--check" | "--seed" | "--runs" | "--quality" => {
                 it.next();
             }
             "--save" => save = Some(PathBuf::from(it.next().ok_or("--save needs a folder")?)),

@@ -46,9 +46,9 @@ pub struct BenchFit {
 }
 
 impl BenchFit {
-    /// The settings a benchmark's arguments ask for: `--quick` (quality 0.4, else 1),
-    /// `--seed N` (else the fit's default seed, 0), `--runs N` (else the page's), `--each` and
-    /// `--windows`.
+    /// The settings a benchmark's arguments ask for: `--quality Q` (in `(0, 16]`, as the CLI's
+    /// `--quality`; `--quick` is 0.4; else 1), `--seed N` (else the fit's default seed, 0),
+    /// `--runs N` (else the page's), `--each` and `--windows`.
     pub fn from_args(args: &[String]) -> Result<BenchFit, String> {
         let has = |flag: &str| args.iter().any(|a| a == flag);
         let number = |flag: &str| -> Result<Option<u64>, String> {
@@ -64,8 +64,19 @@ impl BenchFit {
             Some(0) => return Err("--runs takes a whole number ≥ 1, not '0'".into()),
             r => r.map(|r| usize::try_from(r).unwrap_or(usize::MAX)),
         };
+        let quality = match args.iter().position(|a| a == "--quality") {
+            Some(k) => {
+                let v = args.get(k + 1).ok_or("--quality needs a number")?;
+                match v.parse::<f64>() {
+                    Ok(q) if q > 0.0 && q <= 16.0 => q,
+                    _ => return Err(format!("--quality takes a number in (0, 16], not '{v}'")),
+                }
+            }
+            None if has("--quick") => 0.4,
+            None => 1.0,
+        };
         Ok(BenchFit {
-            quality: if has("--quick") { 0.4 } else { 1.0 },
+            quality,
             seed: number("--seed")?.unwrap_or(0),
             each: has("--each"),
             runs,
@@ -123,6 +134,13 @@ mod tests {
             }
         );
         assert!(BenchFit::from_args(&args(&["--runs", "0"])).is_err());
+        let q = BenchFit::from_args(&args(&["--quality", "2.5"])).unwrap();
+        assert_eq!(q.quality, 2.5);
+        for bad in ["0", "17", "NaN", "-1", "x"] {
+            let e = BenchFit::from_args(&args(&["--quality", bad])).unwrap_err();
+            assert!(e.contains(&format!("'{bad}'")), "{e}");
+        }
+        assert!(BenchFit::from_args(&args(&["--quality"])).is_err());
         assert!(BenchFit::from_args(&args(&["--seed"])).is_err());
         let e = BenchFit::from_args(&args(&["--seed", "-1"])).unwrap_err();
         assert!(e.contains("'-1'"), "{e}");
