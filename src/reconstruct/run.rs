@@ -375,8 +375,8 @@ impl Run {
         // Tried here and not kept: a sweep of the camera's elevation between stages 2 and 3.
         // The Mitsuba mug seen from 60° is fitted from 54–56° in every run (seed 2, best loss
         // 6.23e-4, IoU-64 0.888); with the elevation held at 58 / 60 / 62° through stages 2
-        // and 3 the best run's loss is 4.83 / 4.97 / 5.71e-4 (64°: 7.06e-4), so the loss
-        // does prefer the true elevation and Adam does not get there. But a sweep (the
+        // and 3 the best run's loss is 4.83 / 4.97 / 5.71e-4 (56°: 5.81e-4, 64°: 7.06e-4), so
+        // the loss prefers 58–60° and Adam does not get there. But a sweep (the
         // elevation ±2° and ±4°, each with 40 Adam steps at stage 2's detail and the elevation
         // held, the lowest loss going on to stage 3) moved the dish photos' mean IoU-64 at
         // seeds 0 / 1 / 2 from 0.930 / 0.934 / 0.926 to 0.923 / 0.934 / 0.921 (the same mug at
