@@ -46,10 +46,10 @@ pub struct BenchFit {
 }
 
 impl BenchFit {
-    /// The settings a benchmark's arguments ask for: `--quality Q` (in (0,
-    /// [`MAX_QUALITY`](crate::reconstruct::MAX_QUALITY)], as the CLI's `--quality`; `--quick`
-    /// is 0.4; else 1), `--seed N` (else the fit's default seed, 0), `--runs N` (else the
-    /// page's), `--each` and `--windows`.
+    /// The settings a benchmark's arguments ask for: `--quality Q` (as the CLI's `--quality`,
+    /// [`check_quality`](crate::reconstruct::check_quality); `--quick` is 0.4; else 1),
+    /// `--seed N` (else the fit's default seed, 0), `--runs N` (else the page's), `--each` and
+    /// `--windows`.
     pub fn from_args(args: &[String]) -> Result<BenchFit, String> {
         let has = |flag: &str| args.iter().any(|a| a == flag);
         let number = |flag: &str| -> Result<Option<u64>, String> {
@@ -68,10 +68,12 @@ impl BenchFit {
         let quality = match args.iter().position(|a| a == "--quality") {
             Some(k) => {
                 let v = args.get(k + 1).ok_or("--quality needs a number")?;
-                let max = crate::reconstruct::MAX_QUALITY;
                 match v.parse::<f64>() {
-                    Ok(q) if q > 0.0 && q <= max => q,
-                    _ => return Err(format!("--quality takes a number in (0, {max}], not '{v}'")),
+                    Ok(q) if crate::reconstruct::check_quality(q).is_ok() => q,
+                    _ => {
+                        let max = crate::reconstruct::MAX_QUALITY;
+                        return Err(format!("--quality takes a number in (0, {max}], not '{v}'"));
+                    }
                 }
             }
             None if has("--quick") => 0.4,

@@ -28,6 +28,16 @@ pub const DEFAULT_RESTARTS: usize = 3;
 /// the default budget is already minutes of work a run).
 pub const MAX_QUALITY: f64 = 16.0;
 
+/// Checks a [`FitConfig::quality`] (the page's effort, the CLI's `--quality`, a tree fit's
+/// too): finite and in (0, [`MAX_QUALITY`]]. The error says which value and the range.
+pub fn check_quality(quality: f64) -> Result<(), String> {
+    if quality.is_finite() && quality > 0.0 && quality <= MAX_QUALITY {
+        Ok(())
+    } else {
+        Err(format!("quality {quality} is not in (0, {MAX_QUALITY}]"))
+    }
+}
+
 /// Below this quality a fit is a quick preview: one run, not the best of several
 /// ([`FitConfig::restarts_for`]).
 pub const QUICK_QUALITY: f64 = 0.5;
@@ -200,12 +210,7 @@ impl FitConfig {
                 m.height()
             )));
         }
-        if !(config.quality.is_finite() && config.quality > 0.0 && config.quality <= MAX_QUALITY) {
-            return Err(FitError(format!(
-                "quality {} is not in (0, {MAX_QUALITY}]",
-                config.quality
-            )));
-        }
+        check_quality(config.quality).map_err(FitError)?;
         if config.budget == Some(0) {
             return Err(FitError("the evaluation budget must be at least 1".into()));
         }

@@ -32,7 +32,7 @@ pub mod windows;
 
 pub use config::{
     DEFAULT_EVALUATIONS, DEFAULT_RESTARTS, FitConfig, MAX_QUALITY, MAX_RESTARTS, MAX_VIEWS,
-    QUICK_QUALITY,
+    QUICK_QUALITY, check_quality,
 };
 pub use eval::{align_to_reference, iou64, normalized};
 pub use objective::{FitObjective, Layout, render_coverage, resample_mask};

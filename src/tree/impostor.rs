@@ -910,10 +910,7 @@ pub const PHOTO_GA_BUDGET: usize = 1152;
 /// [`MIN_QUALITY_BUDGET`]. Errors on a quality outside (0,
 /// [`crate::reconstruct::MAX_QUALITY`]], like the silhouette fit.
 pub fn ga_budget_for_quality(quality: f64) -> Result<Option<usize>, TreeError> {
-    let max = crate::reconstruct::MAX_QUALITY;
-    if !(quality.is_finite() && quality > 0.0 && quality <= max) {
-        return Err(TreeError(format!("quality {quality} is not in (0, {max}]")));
-    }
+    crate::reconstruct::check_quality(quality).map_err(TreeError)?;
     if quality == 1.0 {
         return Ok(None);
     }
