@@ -870,6 +870,8 @@ fn fit_scored(
                 ("wing", idx::WING_LENGTH),
                 ("wing_w", idx::WING_WIDTH),
                 ("balcony_start", idx::BALCONY_START),
+                ("chimneys", idx::CHIMNEYS),
+                ("chimney_h", idx::CHIMNEY_HEIGHT),
             ]
             .iter()
             .map(|(n, i)| format!("{n}={:.2}", p[*i]))

@@ -19,6 +19,9 @@
 //!   `balcony_start_floor` up.
 //! - **Roof**: flat slab, gable (ridge along X), hip, or shed (one slope rising to the back),
 //!   with `roof_overhang`, `roof_pitch` and a fascia of `roof_base`.
+//! - **Chimneys** (`chimneys`): none, one, a pair mirrored in X or four mirrored in X and Z,
+//!   square boxes of wall standing `chimney_height` above the eaves at (`chimney_x`,
+//!   `chimney_z`) as fractions of the main block's half-length and half-depth.
 //! - **Footprint**: a rectangle, or an L (`footprint`): a plain wing `wing_width` × length wide
 //!   at the left or right end of the front façade (`wing_side`), reaching `wing_length` out in
 //!   front of it, as tall as the main block, under the same kind of roof with its ridge along Z.
@@ -50,6 +53,8 @@ pub const ROOF_TYPES: &[&str] = &["flat", "gable", "hip", "shed"];
 pub const FOOTPRINTS: &[&str] = &["rectangle", "L"];
 /// The choices of `wing_side`.
 pub const WING_SIDES: &[&str] = &["left", "right"];
+/// The choices of `chimneys`.
+pub const CHIMNEY_LAYOUTS: &[&str] = &["none", "one", "pair", "four"];
 /// Thickness of a glass pane.
 const GLASS: f64 = 0.02;
 /// Thickness of the door leaf.
@@ -145,8 +150,18 @@ pub mod idx {
     pub const WING_LENGTH: usize = 53;
     /// Width of the L's wing / length of the building.
     pub const WING_WIDTH: usize = 54;
+    /// Chimneys on the main roof (none, one, a pair mirrored in X, four mirrored in X and Z).
+    pub const CHIMNEYS: usize = 55;
+    /// A chimney's centre along the length, as a fraction of the half-length.
+    pub const CHIMNEY_X: usize = 56;
+    /// A chimney's centre across the depth, as a fraction of the half-depth (+ is the front).
+    pub const CHIMNEY_Z: usize = 57;
+    /// A chimney's side (square).
+    pub const CHIMNEY_SIZE: usize = 58;
+    /// How far a chimney's top stands above the roof's eaves.
+    pub const CHIMNEY_HEIGHT: usize = 59;
     /// Number of parameters.
-    pub const COUNT: usize = 55;
+    pub const COUNT: usize = 60;
 }
 
 const fn spec_entry(
@@ -594,6 +609,46 @@ pub static SPEC: [ParamSpec; idx::COUNT] = [
         (0.15, 0.8, 0.35),
         CONT,
     ),
+    spec_entry(
+        "chimneys",
+        "Chimneys",
+        "Roof",
+        "",
+        (0.0, 3.0, 0.0),
+        ParamKind::Categorical(CHIMNEY_LAYOUTS),
+    ),
+    spec_entry(
+        "chimney_x",
+        "Chimney along",
+        "Roof",
+        "",
+        (-0.9, 0.9, 0.5),
+        CONT,
+    ),
+    spec_entry(
+        "chimney_z",
+        "Chimney across",
+        "Roof",
+        "",
+        (-0.9, 0.9, -0.3),
+        CONT,
+    ),
+    spec_entry(
+        "chimney_size",
+        "Chimney size",
+        "Roof",
+        "m",
+        (0.3, 2.0, 0.7),
+        CONT,
+    ),
+    spec_entry(
+        "chimney_height",
+        "Chimney height",
+        "Roof",
+        "m",
+        (0.3, 8.0, 2.5),
+        CONT,
+    ),
 ];
 
 /// Part ids, in the order of [`PARTS`].
@@ -1023,6 +1078,27 @@ fn roof<S: Scalar>(b: &mut Builder<S>, p: &[S], f: &RoofFrame<S>, top: S) {
     b.polyhedron(&c, &faces, ROOF);
 }
 
+/// The chimneys of `p` on the main block (`±half_l × ±half_d`, walls up to `top`): square
+/// boxes from inside the roof (`top`) up to `chimney_height` above the eaves, at
+/// (`chimney_x`·half_l, `chimney_z`·half_d), mirrored in X for a pair and in X and Z for four.
+fn chimneys<S: Scalar>(b: &mut Builder<S>, p: &[S], half_l: S, half_d: S, top: S) {
+    let layout = p[idx::CHIMNEYS].val().round() as usize;
+    if layout == 0 {
+        return;
+    }
+    let (x, z) = (p[idx::CHIMNEY_X] * half_l, p[idx::CHIMNEY_Z] * half_d);
+    let h = p[idx::CHIMNEY_SIZE] * 0.5;
+    let y1 = top + p[idx::ROOF_BASE] + p[idx::CHIMNEY_HEIGHT];
+    let xs: &[f64] = if layout >= 2 { &[1.0, -1.0] } else { &[1.0] };
+    let zs: &[f64] = if layout == 3 { &[1.0, -1.0] } else { &[1.0] };
+    for &sx in xs {
+        for &sz in zs {
+            let (cx, cz) = (x * sx, z * sz);
+            b.cuboid([cx - h, top, cz - h], [cx + h, y1, cz + h], WALL);
+        }
+    }
+}
+
 impl Model for Building {
     fn spec(&self) -> &[ParamSpec] {
         &SPEC
@@ -1099,6 +1175,7 @@ impl Model for Building {
             along_z: false,
         };
         roof(&mut b, p, &main, height);
+        chimneys(&mut b, p, half_l, half_d, height);
         if pv[idx::FOOTPRINT].round() as i64 == 1 {
             // The L's wing: a plain block at one end of the front façade, from the building's
             // centre line out to `wing_length` in front of it, the main block's height, under
@@ -1145,8 +1222,15 @@ impl Generator for Building {
 
     /// The L's wing (`footprint` 1) added to the rectangle: from one view a wing can hide
     /// behind the main block, and stage 1 seeds no L (see [`Building::seeds`]).
+    /// The chimneys too: a chimney hidden behind the roof costs nothing in eq. 1 either, and
+    /// Occam's step removes it (a recovered house, `tests/reconstruct.rs` building case 2:
+    /// IoU-64 0.890 with chimneys as a plain parameter, 0.983 as a structure choice). On the
+    /// building benchmark (`cargo bench --bench building_bench -- --seed N`, mask / plain /
+    /// gradient / textured means) the two are alike: at seed 0 0.951 / 0.948 / 0.907 / 0.924
+    /// against 0.952 / 0.948 / 0.906 / 0.922 as a plain parameter, at seed 1 0.888 / 0.935 /
+    /// 0.917 / 0.904 against 0.886 / 0.929 / 0.916 / 0.902.
     fn structure_choices(&self) -> &'static [usize] {
-        &[idx::FOOTPRINT]
+        &[idx::FOOTPRINT, idx::CHIMNEYS]
     }
 
     fn presets(&self) -> Vec<Preset> {

@@ -114,6 +114,61 @@ fn buildings_are_mirror_symmetric() {
 }
 
 #[test]
+fn chimneys_follow_their_layout_and_parameters() {
+    let villa = Building.preset("villa").expect("villa").values;
+    let base = Building.generate(&villa, Lod::Low).expect("generate");
+    let wall_tris = |m: &procfit_generators::Mesh| m.tri_parts.iter().filter(|&&p| p == 0).count();
+    // none, one, a pair, four: each chimney one closed box (12 triangles) of wall.
+    for (layout, boxes) in [(0.0, 0), (1.0, 1), (2.0, 2), (3.0, 4)] {
+        let mut p = villa.clone();
+        p[idx::CHIMNEYS] = layout;
+        let m = Building.generate(&p, Lod::Low).expect("generate");
+        assert_eq!(
+            wall_tris(&m),
+            wall_tris(&base) + 12 * boxes,
+            "layout {layout}"
+        );
+        if let Err(e) = validate(&m) {
+            panic!("layout {layout}: {e}");
+        }
+    }
+    // Their tops stand chimney_height above the eaves (the walls' top plus the fascia), above
+    // everything else when tall; four are mirror images in x and z.
+    let mut p = villa.clone();
+    p[idx::CHIMNEYS] = 3.0;
+    p[idx::CHIMNEY_HEIGHT] = 8.0;
+    let m = Building.generate(&p, Lod::Ultra).expect("generate");
+    let eaves = p[idx::BASE_HEIGHT]
+        + p[idx::FLOORS] * p[idx::FLOOR_HEIGHT]
+        + p[idx::TOP_HEIGHT]
+        + p[idx::ROOF_BASE];
+    let top = m.positions.iter().map(|v| v.y).fold(f32::MIN, f32::max);
+    assert!(
+        (f64::from(top) - eaves - 8.0).abs() < 1e-4,
+        "top {top}, eaves {eaves}"
+    );
+    let key = |x: f32, y: f32, z: f32| {
+        (
+            (x * 1e3).round() as i64,
+            (y * 1e3).round() as i64,
+            (z * 1e3).round() as i64,
+        )
+    };
+    let set: std::collections::HashSet<_> =
+        m.positions.iter().map(|v| key(v.x, v.y, v.z)).collect();
+    for v in &m.positions {
+        assert!(
+            set.contains(&key(-v.x, v.y, v.z)) && set.contains(&key(v.x, v.y, -v.z)),
+            "{v}"
+        );
+    }
+    // Their position, size and height are differentiable: the villa's 11 moving parameters
+    // at Medium and the four of the chimneys.
+    let got = check_gradient(&Building, &p, Lod::Medium, "villa with four chimneys");
+    assert_eq!(got, 15, "parameters that move the mesh");
+}
+
+#[test]
 fn every_part_appears_at_ultra() {
     // The villa has windows, balconies, a door and stairs under a roof.
     let m = Building
