@@ -25,11 +25,11 @@
 //! - **Footprint**: a rectangle, or an L (`footprint`): a plain wing `wing_width` × length wide
 //!   at the left or right end of the front façade (`wing_side`), reaching `wing_length` out in
 //!   front of it, as tall as the main block, under the same kind of roof with its ridge along Z.
-//!   An L is the one layout that is not mirror-symmetric; its sizes are continuous, so they get
-//!   derivatives like the others.
+//!   An L and a single chimney are the layouts that are not mirror-symmetric; their sizes and
+//!   places are continuous, so they get derivatives like the others.
 //!
 //! # Levels of detail
-//! - LOW: one box and the roof.
+//! - LOW: one box, the roof and the chimneys.
 //! - MEDIUM: a core box set back by `relief`, with plinth, attic and wall stripes filling the
 //!   façade layer, so window, balcony and entrance stripes read as recessed bands.
 //! - HIGH: adds glass plates, balcony slabs with solid front plates, the door and a block of

@@ -76,17 +76,20 @@ fn random_in_range_parameters_give_valid_meshes() {
     }
 }
 
+/// A vertex rounded to the millimetre, to find its mirror images.
+fn key(x: f32, y: f32, z: f32) -> (i64, i64, i64) {
+    (
+        (x * 1e3).round() as i64,
+        (y * 1e3).round() as i64,
+        (z * 1e3).round() as i64,
+    )
+}
+
 #[test]
 fn buildings_are_mirror_symmetric() {
     // Every vertex has a mirror image in x and in z (paper: symmetry planes YZ and XY).
-    let key = |x: f32, y: f32, z: f32| {
-        (
-            (x * 1e3).round() as i64,
-            (y * 1e3).round() as i64,
-            (z * 1e3).round() as i64,
-        )
-    };
-    // An L footprint is the one layout that is not symmetric (its wing stands at one end); a
+    // An L footprint is not symmetric (its wing stands at one end), nor one chimney (no preset
+    // has one); a
     // shed roof is symmetric in x only (it rises to the back).
     for preset in Building.presets() {
         if preset.values[idx::FOOTPRINT] != 0.0 {
@@ -147,13 +150,6 @@ fn chimneys_follow_their_layout_and_parameters() {
         (f64::from(top) - eaves - 8.0).abs() < 1e-4,
         "top {top}, eaves {eaves}"
     );
-    let key = |x: f32, y: f32, z: f32| {
-        (
-            (x * 1e3).round() as i64,
-            (y * 1e3).round() as i64,
-            (z * 1e3).round() as i64,
-        )
-    };
     let set: std::collections::HashSet<_> =
         m.positions.iter().map(|v| key(v.x, v.y, v.z)).collect();
     for v in &m.positions {
