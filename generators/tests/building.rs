@@ -89,8 +89,7 @@ fn key(x: f32, y: f32, z: f32) -> (i64, i64, i64) {
 fn buildings_are_mirror_symmetric() {
     // Every vertex has a mirror image in x and in z (paper: symmetry planes YZ and XY).
     // An L footprint is not symmetric (its wing stands at one end), nor one chimney (no preset
-    // has one); a
-    // shed roof is symmetric in x only (it rises to the back).
+    // has one); a shed roof is symmetric in x only (it rises to the back).
     for preset in Building.presets() {
         if preset.values[idx::FOOTPRINT] != 0.0 {
             continue;
