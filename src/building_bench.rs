@@ -872,6 +872,7 @@ fn fit_scored(
                 ("balcony_start", idx::BALCONY_START),
                 ("chimneys", idx::CHIMNEYS),
                 ("chimney_h", idx::CHIMNEY_HEIGHT),
+                ("hip_ridge", idx::HIP_RIDGE),
             ]
             .iter()
             .map(|(n, i)| format!("{n}={:.2}", p[*i]))

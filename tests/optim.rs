@@ -437,3 +437,62 @@ fn extra_seeds_join_only_when_better_than_every_seed() {
     m.run(&with_grad(mixed));
     assert!(m.best().unwrap().value <= mixed(&optimum, None) + 1e-12);
 }
+
+/// A variable left to local search ([`Memetic::with_unmutated`]: a hip roof's ridge length)
+/// changes nothing for the others — the same random numbers, the same best point and
+/// evaluation count as a run without it — stays at its seeds' value where it has no gradient,
+/// and is fitted by the Adam steps where it has one.
+#[test]
+fn unmutated_variables_are_left_to_local_search() {
+    let seeds = vec![vec![0.0; 7], vec![1.0, 1.0, 1.0, 1.0, 3.0, 1.0, 2.0]];
+    let config = MemeticConfig {
+        max_evaluations: 600,
+        ..MemeticConfig::default()
+    };
+    let plain = {
+        let mut m = Memetic::new(mixed_domain(), &seeds, config).unwrap();
+        m.run(&with_grad(mixed));
+        m
+    };
+    let mut vars = mixed_domain().vars().to_vec();
+    vars.push(Var::continuous(0.0, 4.0));
+    let domain = Domain::new(vars).unwrap();
+    let longer: Vec<Vec<f64>> = seeds
+        .iter()
+        .map(|s| s.iter().copied().chain([0.5]).collect())
+        .collect();
+    // The eighth variable moves nothing.
+    let idle = |x: &[f64], g: Option<&mut [f64]>| match g {
+        Some(g) => mixed(&x[..7], Some(&mut g[..7])),
+        None => mixed(&x[..7], None),
+    };
+    let mut m = Memetic::new(domain.clone(), &longer, config)
+        .unwrap()
+        .with_unmutated(&[7])
+        .unwrap();
+    m.run(&with_grad(idle));
+    assert_eq!(m.status().evaluations, plain.status().evaluations);
+    assert_eq!(m.best().unwrap().x[..7], plain.best().unwrap().x[..]);
+    assert!(m.population().iter().all(|i| i.x[7] == 0.5));
+    // With a gradient the local searches fit it.
+    let pulled = |x: &[f64], g: Option<&mut [f64]>| {
+        let d = x[7] - 2.5;
+        match g {
+            Some(g) => {
+                g[7] = 2.0 * d;
+                mixed(&x[..7], Some(&mut g[..7])) + d * d
+            }
+            None => mixed(&x[..7], None) + d * d,
+        }
+    };
+    let long = MemeticConfig {
+        max_evaluations: 3000,
+        ..config
+    };
+    let mut m = Memetic::new(domain, &longer, long)
+        .unwrap()
+        .with_unmutated(&[7])
+        .unwrap();
+    let best = m.run(&with_grad(pulled)).unwrap().clone();
+    assert!((best.x[7] - 2.5).abs() < 0.05, "best {:?}", best.x);
+}

@@ -28,15 +28,16 @@ fn check_grad(preset: &str, lod: Lod, moving: usize) {
 fn vjp_matches_finite_differences_for_every_preset_at_two_lods() {
     // Medium: sizes, relief and roof; Ultra adds windows, frames, doors, stairs, balconies.
     // Parameters that do not move a preset: balcony sizes without balconies, the pitch of a
-    // flat roof, the wall-stripe width where no front stripe is a wall.
+    // flat roof, the hip ridge of any roof but a hip, the wall-stripe width where no front
+    // stripe is a wall.
     check_grad("panel_block", Lod::Medium, 10);
     check_grad("panel_block", Lod::Ultra, 23);
     check_grad("suburban_house", Lod::Medium, 11);
     check_grad("suburban_house", Lod::Ultra, 19);
     check_grad("office_block", Lod::Medium, 9);
     check_grad("office_block", Lod::Ultra, 17);
-    check_grad("villa", Lod::Medium, 11);
-    check_grad("villa", Lod::Ultra, 24);
+    check_grad("villa", Lod::Medium, 12);
+    check_grad("villa", Lod::Ultra, 25);
     check_grad("tower", Lod::Medium, 11);
     check_grad("tower", Lod::Ultra, 24);
     check_grad("warehouse", Lod::Medium, 11);
@@ -161,10 +162,41 @@ fn chimneys_follow_their_layout_and_parameters() {
             );
         }
     }
-    // Their position, size and height are differentiable: the villa's 11 moving parameters
+    // Their position, size and height are differentiable: the villa's 12 moving parameters
     // at Medium and the four of the chimneys.
     let got = check_gradient(&Building, &p, Lod::Medium, "villa with four chimneys");
-    assert_eq!(got, 15, "parameters that move the mesh");
+    assert_eq!(got, 16, "parameters that move the mesh");
+}
+
+#[test]
+fn hip_ridge_lengthens_the_ridge_and_steepens_the_hip_ends() {
+    // The ridge: the roof's highest vertices; its length along X.
+    let ridge = |t: f64| {
+        let mut p = Building.preset("villa").expect("villa").values;
+        p[idx::HIP_RIDGE] = t;
+        let m = Building.generate(&p, Lod::Low).expect("generate");
+        let top = m.positions.iter().map(|v| v.y).fold(f32::MIN, f32::max);
+        let xs: Vec<f32> = m
+            .positions
+            .iter()
+            .filter(|v| (v.y - top).abs() < 1e-4)
+            .map(|v| v.x)
+            .collect();
+        let len =
+            xs.iter().fold(f32::MIN, |a, &b| a.max(b)) - xs.iter().fold(f32::MAX, |a, &b| a.min(b));
+        (top, len)
+    };
+    let (h0, l0) = ridge(0.0);
+    let (h1, l1) = ridge(0.5);
+    // Same height (the pitch across the ridge is the sides'), a ridge longer by half the
+    // half-depth on each end.
+    let villa = Building.preset("villa").expect("villa").values;
+    assert!((h0 - h1).abs() < 1e-4, "{h0} {h1}");
+    assert!(
+        ((l1 - l0) as f64 - villa[idx::DEPTH] * 0.5).abs() < 1e-3,
+        "ridge {l0} -> {l1}, depth {}",
+        villa[idx::DEPTH]
+    );
 }
 
 #[test]

@@ -181,6 +181,9 @@ pub struct Memetic {
     active: Vec<usize>,
     /// The frozen variables' values (empty when nothing is frozen).
     frozen: Vec<(usize, f64)>,
+    /// Variables that mutation, crossover and random restarts never change
+    /// ([`Memetic::with_unmutated`]); never in `active`.
+    unmutated: Vec<usize>,
     /// Starting individuals still to be polished and inserted.
     to_polish: Vec<Vec<f64>>,
     population: Vec<Individual>,
@@ -199,6 +202,17 @@ impl Memetic {
         seeds: &[Vec<f64>],
         config: MemeticConfig,
     ) -> Result<Memetic, OptimError> {
+        Memetic::build(domain, seeds, config, Vec::new())
+    }
+
+    /// [`Memetic::new`] with `unmutated` ([`Memetic::with_unmutated`]) out of the search from
+    /// the first starting point on.
+    fn build(
+        domain: Domain,
+        seeds: &[Vec<f64>],
+        config: MemeticConfig,
+        unmutated: Vec<usize>,
+    ) -> Result<Memetic, OptimError> {
         config.validate()?;
         let seeds = seeds
             .iter()
@@ -213,8 +227,9 @@ impl Memetic {
             to_screen: Vec::new(),
             screened: Vec::new(),
             extras: Vec::new(),
-            active: (0..n_vars).collect(),
+            active: (0..n_vars).filter(|i| !unmutated.contains(i)).collect(),
             frozen: Vec::new(),
+            unmutated,
             to_polish: Vec::new(),
             population: Vec::new(),
             best: None,
@@ -255,16 +270,29 @@ impl Memetic {
         if self.to_screen.is_empty() {
             let mut seeds = self.seeds.clone();
             seeds.extend(extras);
-            return Memetic::new(self.domain, &seeds, self.config);
+            return Memetic::build(self.domain, &seeds, self.config, self.unmutated);
         }
         // The extras' own variables stay at the regular seeds' value unless an extra joins.
         let first = &self.seeds[0];
         let own = own.start.min(first.len())..own.end.min(first.len());
         let frozen: Vec<(usize, f64)> = own.clone().map(|i| (i, first[i])).collect();
-        self.active = (0..first.len()).filter(|i| !own.contains(i)).collect();
+        self.active = (0..first.len())
+            .filter(|i| !own.contains(i) && !self.unmutated.contains(i))
+            .collect();
         self.frozen = frozen;
         self.extras = extras;
         Ok(self)
+    }
+
+    /// Leaves `vars` to local search: mutation, crossover and random restarts keep each at its
+    /// seeds' value (a random restart point at its lower bound), while the Adam polish and
+    /// local searches move them like the others. For a refinement of shapes the seeds already
+    /// make (a hip roof's ridge length) that would only add a dimension to the random search.
+    /// The other variables draw the same random numbers as a run without `vars` would. Call it
+    /// before [`Memetic::with_extra_seeds`] (it starts the run afresh). Errors as
+    /// [`Memetic::new`].
+    pub fn with_unmutated(self, vars: &[usize]) -> Result<Memetic, OptimError> {
+        Memetic::build(self.domain, &self.seeds, self.config, vars.to_vec())
     }
 
     /// `count` new starting points: mutated copies of `from` (cycled), mutation rate and sigma
@@ -498,7 +526,9 @@ impl Memetic {
             let extras = self.run_jobs(objective, jobs);
             if extras.iter().any(|i| i.value < best) {
                 self.screened.extend(extras);
-                self.active = (0..self.domain.vars().len()).collect();
+                self.active = (0..self.domain.vars().len())
+                    .filter(|i| !self.unmutated.contains(i))
+                    .collect();
                 self.frozen.clear();
             } else {
                 // Dropped: as if never evaluated (`best` did not change, none was better).

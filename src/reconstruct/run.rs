@@ -155,6 +155,7 @@ impl Run {
                     ..MemeticConfig::default()
                 },
             )
+            .and_then(|m| m.with_unmutated(g.refined_only()))
             .and_then(|m| m.with_extra_seeds(&extras, own))
             .map_err(|e| FitError(e.to_string()))?;
             searches.push(Search {
