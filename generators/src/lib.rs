@@ -465,9 +465,9 @@ pub trait Generator: Send + Sync {
     }
 
     /// Continuous parameters that refine a shape the seeds already make (a hip roof's ridge
-    /// length): stage 1's mutation, crossover and random restarts leave them at the seeds'
-    /// values, and only the gradient steps (stage 1's local searches, stage 2) move them, so
-    /// they add no dimension to the random search. None by default.
+    /// length): stage 1's mutation never changes them, only the gradient steps (stage 1's local
+    /// searches, stage 2) move them from the seeds' values, so they add no dimension to the
+    /// random search. None by default.
     fn refined_only(&self) -> &'static [usize] {
         &[]
     }

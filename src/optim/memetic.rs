@@ -181,8 +181,8 @@ pub struct Memetic {
     active: Vec<usize>,
     /// The frozen variables' values (empty when nothing is frozen).
     frozen: Vec<(usize, f64)>,
-    /// Variables that mutation, crossover and random restarts never change
-    /// ([`Memetic::with_unmutated`]); never in `active`.
+    /// Variables that mutation and random points never change ([`Memetic::with_unmutated`]);
+    /// never in `active`.
     unmutated: Vec<usize>,
     /// Starting individuals still to be polished and inserted.
     to_polish: Vec<Vec<f64>>,
@@ -284,9 +284,9 @@ impl Memetic {
         Ok(self)
     }
 
-    /// Leaves `vars` to local search: mutation, crossover and random restarts keep each at its
-    /// seeds' value (a random restart point at its lower bound), while the Adam polish and
-    /// local searches move them like the others. For a refinement of shapes the seeds already
+    /// Leaves `vars` to local search: mutation never changes them (a random starting point has
+    /// each at its lower bound) and crossover passes them on from a parent, while the Adam
+    /// polish and local searches move them like the others. For a refinement of shapes the seeds already
     /// make (a hip roof's ridge length) that would only add a dimension to the random search.
     /// The other variables draw the same random numbers as a run without `vars` would. Call it
     /// before [`Memetic::with_extra_seeds`] (it starts the run afresh). Errors as
