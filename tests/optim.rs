@@ -396,6 +396,13 @@ fn memetic_restarts_when_the_population_collapses() {
     assert_eq!(calm.status().restarts, 0);
 }
 
+/// A memetic run on [`mixed`] from `seeds`, finished.
+fn run_mixed(seeds: &[Vec<f64>], config: MemeticConfig) -> Memetic {
+    let mut m = Memetic::new(mixed_domain(), seeds, config).unwrap();
+    m.run(&with_grad(mixed));
+    m
+}
+
 /// Extra seeds (a cup's saucer) change nothing when none beats the best regular seed — the
 /// same best point, the same evaluation count — and join the run when one does.
 #[test]
@@ -410,11 +417,7 @@ fn extra_seeds_join_only_when_better_than_every_seed() {
         max_evaluations: 600,
         ..MemeticConfig::default()
     };
-    let plain = {
-        let mut m = Memetic::new(mixed_domain(), &seeds, config).unwrap();
-        m.run(&with_grad(mixed));
-        m
-    };
+    let plain = run_mixed(&seeds, config);
     let worse = vec![vec![4.0, 4.0, 1.0, 1.0, 0.0, 1.0, 1.0]; 3];
     let best_seed = seeds
         .iter()
@@ -449,11 +452,7 @@ fn unmutated_variables_are_left_to_local_search() {
         max_evaluations: 600,
         ..MemeticConfig::default()
     };
-    let plain = {
-        let mut m = Memetic::new(mixed_domain(), &seeds, config).unwrap();
-        m.run(&with_grad(mixed));
-        m
-    };
+    let plain = run_mixed(&seeds, config);
     let mut vars = mixed_domain().vars().to_vec();
     vars.push(Var::continuous(0.0, 4.0));
     let domain = Domain::new(vars).unwrap();
