@@ -1250,15 +1250,15 @@ impl Generator for Building {
     /// The hip ridge: the seeds' hips slope alike on all four sides and the gradient steps
     /// lengthen the ridge where the views ask for it. Measured on the building benchmark
     /// (`cargo bench --bench building_bench -- --seed N`, seeds 0–4, against the generator
-    /// without `hip_ridge`, both with the L's tie prior): the paper's building from its three cameras 0.834 / 0.851 / 0.842
-    /// / 0.813 / 0.820 → 0.847 / 0.857 / 0.916 / 0.894 / 0.853; the ten independent buildings'
-    /// means over the five seeds (mask / plain / gradient / textured) 0.926 / 0.932 / 0.904 /
-    /// 0.906 → 0.916 / 0.934 / 0.900 / 0.905, case by case up and down by the search's chance
-    /// (the local searches of stage 1 move the ridge of every hip in its population, and the
-    /// search takes other paths). Searched by stage 1
-    /// like the others instead (seeds 0–2), the paper's building went further, to 0.921 / 0.900
-    /// / 0.910, but the ten fell to 0.929 / 0.930 / 0.908 / 0.887 (from 0.929 / 0.941 / 0.908
-    /// / 0.907): the extra dimension changed every search.
+    /// without `hip_ridge`, both with the L's tie prior): the paper's building from its three
+    /// cameras 0.834 / 0.851 / 0.842 / 0.813 / 0.820 → 0.847 / 0.857 / 0.916 / 0.894 / 0.853;
+    /// the ten independent buildings' means over the five seeds (mask / plain / gradient /
+    /// textured) 0.926 / 0.932 / 0.904 / 0.906 → 0.916 / 0.934 / 0.900 / 0.905, case by case up
+    /// and down by the search's chance (stage 1's local searches move the ridge of every hip in
+    /// its population, and the search takes other paths). Searched by stage 1 like the others
+    /// instead (seeds 0–2), the paper's building went further, to 0.921 / 0.900 / 0.910, but
+    /// the ten fell to 0.929 / 0.930 / 0.908 / 0.887 (from 0.929 / 0.941 / 0.908 / 0.907): the
+    /// extra dimension changed every search.
     fn refined_only(&self) -> &'static [usize] {
         &[idx::HIP_RIDGE]
     }

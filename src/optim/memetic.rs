@@ -286,8 +286,9 @@ impl Memetic {
 
     /// Leaves `vars` to local search: mutation never changes them (a random starting point has
     /// each at its lower bound) and crossover passes them on from a parent, while the Adam
-    /// polish and local searches move them like the others. For a refinement of shapes the seeds already
-    /// make (a hip roof's ridge length) that would only add a dimension to the random search.
+    /// polish and local searches move them like the others. For a refinement of shapes the
+    /// seeds already make (a hip roof's ridge length) that would only add a dimension to the
+    /// random search.
     /// The other variables draw the same random numbers as a run without `vars` would. Call it
     /// before [`Memetic::with_extra_seeds`] (it starts the run afresh). Errors as
     /// [`Memetic::new`].
