@@ -433,6 +433,13 @@ pub trait Generator: Send + Sync {
         let _ = params;
         0.0
     }
+    /// A loss difference (eq. 1's units, a share of the image's pixels) below which restarts
+    /// tie for [`Generator::tie_prior`] whatever their losses' ratio: where a few hundred
+    /// pixels of outline say less about the shape than the prior does. Added to the lowest
+    /// loss's [`TIE_TOLERANCE`]. 0 by default.
+    fn tie_margin(&self) -> f64 {
+        0.0
+    }
     /// A penalty that keeps shapes sane, and its gradient (same length as `params`). Zero by
     /// default.
     fn regularizer(&self, params: &[f64]) -> (f64, Vec<f64>) {

@@ -85,7 +85,8 @@ pub struct Session {
 }
 
 /// The run a fit keeps among the finished ones: the lowest final loss, except that among the
-/// runs whose losses tie with it (within [`TIE_TOLERANCE`]) the one whose shape is most like a
+/// runs whose losses tie with it (within [`TIE_TOLERANCE`], plus the generator's
+/// [`Generator::tie_margin`](crate::generators::Generator::tie_margin)) the one whose shape is most like a
 /// real object ([`Generator::tie_prior`](crate::generators::Generator::tie_prior)) wins, then the
 /// lowest loss, then the lower index. One photo of a mug cannot tell a handle turned towards the
 /// camera from a shorter one seen side-on, and the restarts find both with losses a few per cent
@@ -128,9 +129,11 @@ fn pick(finished: &[Option<(FitResult, Progress)>]) -> Option<usize> {
             .enumerate()
             .filter_map(|(k, f)| f.as_ref().map(|(r, _)| (k, r)))
     };
-    let lowest = done().map(|(_, r)| r.loss).fold(f64::INFINITY, f64::min);
+    let (lowest, margin) = done()
+        .map(|(_, r)| (r.loss, r.model.generator.tie_margin()))
+        .min_by(|a, b| a.0.total_cmp(&b.0))?;
     done()
-        .filter(|(_, r)| r.loss <= lowest * (1.0 + TIE_TOLERANCE))
+        .filter(|(_, r)| r.loss <= lowest * (1.0 + TIE_TOLERANCE) + margin)
         .map(|(k, r)| (k, r.model.generator.tie_prior(&r.model.params), r.loss))
         .min_by(|a, b| {
             a.1.total_cmp(&b.1)
