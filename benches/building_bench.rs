@@ -188,7 +188,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // Does the warning go with the bad fits? The mean IoU-64 of the warned and of the others.
     let mean = |w: bool| {
         let v: Vec<f64> = warned.iter().filter(|x| x.1 == w).map(|x| x.0).collect();
-        let m = v.iter().sum::<f64>() / v.len().max(1) as f64;
+        if v.is_empty() {
+            return "no fits".to_string();
+        }
+        let m = v.iter().sum::<f64>() / v.len() as f64;
         format!("{} fits, mean IoU-64 {m:.3}", v.len())
     };
     println!(
