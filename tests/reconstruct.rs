@@ -256,6 +256,7 @@ fn single_view_building_3() {
 #[test]
 fn a_hip_roof_with_steep_ends_gets_its_long_ridge() {
     let g = generator("building");
+    let idx = |name| index(g, name);
     let hip = g
         .presets()
         .into_iter()
@@ -285,15 +286,6 @@ fn a_hip_roof_with_steep_ends_gets_its_long_ridge() {
         "hip ridge fitted {ridge:.3}, the truth 0.75"
     );
     assert!(iou >= 0.95, "IoU-64 {iou:.4} < 0.95");
-}
-
-/// The building generator's index of parameter `name`.
-fn idx(name: &str) -> usize {
-    generator("building")
-        .params()
-        .iter()
-        .position(|s| s.name == name)
-        .unwrap()
 }
 
 #[test]
@@ -347,11 +339,14 @@ fn a_handle_turned_towards_the_camera_is_not_fitted_side_on() {
     assert!(iou >= 0.93, "turned handle: IoU-64 {iou:.4} < 0.93");
 }
 
+/// The index of generator `g`'s parameter `name`.
+fn index(g: &dyn procfit::generators::Generator, name: &str) -> usize {
+    g.params().iter().position(|s| s.name == name).unwrap()
+}
+
 /// The value of the fitted parameter `name`.
 fn param(r: &procfit::reconstruct::FitResult, name: &str) -> f64 {
-    let g = r.model.generator;
-    let i = g.params().iter().position(|s| s.name == name).unwrap();
-    r.model.params[i]
+    r.model.params[index(r.model.generator, name)]
 }
 
 /// Issue 16: a mug on a saucer (both lathed from measured dimensions, not by the generator),
