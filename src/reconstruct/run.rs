@@ -4,7 +4,7 @@
 
 use super::FitError;
 use super::config::{FitConfig, Plan};
-use super::handover::{PROBES, probe, probe_starts};
+use super::handover::{PROBES, probe, probe_starts, with_refined_middles};
 use super::layout_search::{SWEEP_WORK, window_sweep};
 use super::objective::{FitObjective, Layout, render_coverage, resample_mask};
 use super::rim::RimTerm;
@@ -307,6 +307,11 @@ impl Run {
                 starts.remove(PROBES);
             }
         }
+        let starts = with_refined_middles(
+            starts,
+            search.memetic.domain(),
+            search.generator.refined_only(),
+        );
         self.phase = self.start_adam(2, starts[0].clone());
         if let Phase::Adam(stage) = &mut self.phase {
             let side =
