@@ -8,7 +8,7 @@ use super::handover::{PROBES, probe, probe_starts, with_refined_middles};
 use super::layout_search::{SWEEP_WORK, window_sweep};
 use super::objective::{FitObjective, Layout, render_coverage, resample_mask};
 use super::rim::RimTerm;
-use super::seeds::{SINGLE_VIEW_POPULATION, start_points};
+use super::seeds::{SINGLE_VIEW_POPULATION, refined_at_middle, start_points};
 use super::session::{FitResult, PREVIEW_SIDE, Progress};
 use super::windows::WindowTerm;
 use crate::generators::{Generator, Lod};
@@ -110,9 +110,15 @@ fn work_weight(side: u32) -> f64 {
 
 impl Run {
     /// Starts run `config` (its own seed) of a fit of `masks` checked into `plan` (by
-    /// [`FitConfig::plan`]). Nothing is evaluated yet. Errors only when no seed of a
-    /// generator can be placed in the views, or on a bad search domain.
-    pub(super) fn new(config: FitConfig, masks: Vec<Mask>, plan: &Plan) -> Result<Run, FitError> {
+    /// [`FitConfig::plan`]); with `refined_middle`, the seeds' refined-only variables at the
+    /// middle of their range ([`refined_at_middle`]). Nothing is evaluated yet. Errors only
+    /// when no seed of a generator can be placed in the views, or on a bad search domain.
+    pub(super) fn new(
+        config: FitConfig,
+        masks: Vec<Mask>,
+        plan: &Plan,
+        refined_middle: bool,
+    ) -> Result<Run, FitError> {
         let Plan {
             windows,
             stage_masks,
@@ -132,9 +138,13 @@ impl Run {
         };
         let mut searches = Vec::new();
         for (k, &g) in candidates.iter().enumerate() {
+            let shapes = |s: Vec<Vec<f64>>| match refined_middle {
+                true => refined_at_middle(g, s),
+                false => s,
+            };
             let (layout, domain, seeds) = start_points(
                 g,
-                g.seeds(),
+                shapes(g.seeds()),
                 start.as_deref(),
                 stats,
                 &fov,
@@ -144,9 +154,17 @@ impl Run {
             let (extras, own) = match g.extra_seeds() {
                 (e, _) if e.is_empty() => (Vec::new(), 0..0),
                 (e, own) => (
-                    start_points(g, e, None, stats, &fov, config.fit_fov, windows.is_none())
-                        .map(|(_, _, points)| points)
-                        .unwrap_or_default(),
+                    start_points(
+                        g,
+                        shapes(e),
+                        None,
+                        stats,
+                        &fov,
+                        config.fit_fov,
+                        windows.is_none(),
+                    )
+                    .map(|(_, _, points)| points)
+                    .unwrap_or_default(),
                     own,
                 ),
             };

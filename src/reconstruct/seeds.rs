@@ -48,6 +48,21 @@ fn symmetric_about_y(mesh: &Mesh) -> bool {
     (size.x - size.z).abs() <= tol && (lo.x + hi.x).abs() <= tol && (lo.z + hi.z).abs() <= tol
 }
 
+/// `shapes` (seeds of `g`) with `g`'s refined-only variables
+/// ([`Generator::refined_only`]) at the middle of their range: the seeds of every other
+/// restart ([`super::Session`]).
+pub(super) fn refined_at_middle(g: &dyn Generator, mut shapes: Vec<Vec<f64>>) -> Vec<Vec<f64>> {
+    let specs = g.params();
+    for x in &mut shapes {
+        for &i in g.refined_only() {
+            if let (Some(v), Some(s)) = (x.get_mut(i), specs.get(i)) {
+                *v = 0.5 * (s.min + s.max);
+            }
+        }
+    }
+    shapes
+}
+
 /// The layout, the domain and the seed points of a generator's stage 1: `start` (if any) and
 /// then each of `shapes` (the generator's seeds, or its extra seeds), × each camera candidate
 /// (yaw turns too when `turn`), with scale and translation solved per view from the mask's
