@@ -94,7 +94,9 @@ pub(super) fn probe(
 /// 0.753 → 0.939 (the ridge from 0.45 instead of 0) and at seed 4 0.821 → 0.826, the flat
 /// block (fitted as a 5° hip) on textured ground at seed 4 0.774 → 0.855 and on plain ground
 /// 0.881 → 0.879, the L with flat roofs on plain ground at seed 4 0.900 → 0.906. Holding the
-/// ridge at 0.45 in stage 1 instead changed every search (`Building::refined_only`'s doc).
+/// ridge at 0.45 in stage 1 instead changed every search (`Building::refined_only`'s doc);
+/// it is held there in every other restart now (`Session`'s doc), whose starts are at the
+/// middle already and get no copy.
 pub(super) fn with_refined_middles(
     starts: Vec<Vec<f64>>,
     domain: &Domain,
