@@ -474,8 +474,9 @@ pub trait Generator: Send + Sync {
     /// Continuous parameters that refine a shape the seeds already make (a hip roof's ridge
     /// length): stage 1's mutation never changes them, only the gradient steps (stage 1's local
     /// searches, stages 2 and 3, whose steps are longer for them) move them from the seeds'
-    /// values, so they add no dimension to the random search; the hand-over also tries each of
-    /// its starts with them at the middle of their range. None by default.
+    /// values, so they add no dimension to the random search. Every other restart's seeds have
+    /// them at the middle of their range instead, and the other restarts' hand-over also tries
+    /// each of its starts with them there. None by default.
     fn refined_only(&self) -> &'static [usize] {
         &[]
     }

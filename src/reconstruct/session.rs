@@ -95,8 +95,8 @@ pub struct FitResult {
 /// runs stay near the middle: the hip with dormers on plain ground at seed 1 0.949 → 0.906).
 /// Also probing the seeds' value at the odd runs' hand-over (the mirror of the even runs'
 /// probe) moved the ten's means at seeds 0 and 1 by at most 0.002 and the paper's building
-/// 0.940 / 0.930 → 0.944 / 0.927: not kept. Generators without
-/// refined-only variables (the dish) run as before.
+/// 0.940 / 0.930 → 0.944 / 0.927: not kept. Generators without refined-only variables (the
+/// dish) run as before.
 pub struct Session {
     config: FitConfig,
     runs: Vec<Run>,
