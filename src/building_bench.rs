@@ -25,7 +25,7 @@ use crate::camera::View;
 use crate::generators::building::idx;
 use crate::generators::{Generator, Lod, Mesh, Part};
 use crate::mask::{LabelImage, Mask};
-use crate::reconstruct::eval::view_iou;
+use crate::reconstruct::eval::{self, view_iou};
 use crate::reconstruct::views::ViewVars;
 use crate::reconstruct::{
     FitConfig, FitError, FitResult, Session, align_to_reference, iou64, render_coverage,
@@ -766,8 +766,7 @@ pub struct RunScore {
     /// The paper's IoU-64 against the truth, as [`BenchScore::iou64`].
     pub iou64: f64,
     /// Its IoU-64 against the kept run's model, both in the kept run's frame
-    /// ([`eval::fit_agreement`](crate::reconstruct::eval::fit_agreement)): how different a
-    /// shape it is.
+    /// ([`eval::fit_agreement`]): how different a shape it is.
     pub agreement: f64,
     /// Whether the fit kept this run.
     pub kept: bool,
@@ -782,6 +781,9 @@ pub struct BenchScore {
     pub iou64: f64,
     /// The fit through its own fitted camera against the true mask.
     pub photo_iou: f64,
+    /// The fit through its own fitted camera against the mask it was given (a photo's
+    /// automatic cut), as the CLI prints it ([`eval::result_photo_ious`]): what the user sees.
+    pub mask_photo_iou: f64,
     /// For a photo: CIE76 ΔE*ab of the fitted model's wall and roof colours measured in the
     /// photo ([`crate::colors::estimate`]) against the colours the photo was drawn with
     /// (`None` where the fitted model has no such part in view).
@@ -882,13 +884,17 @@ fn fit_scored(
                 loss: run.loss,
                 tie_prior: run.model.generator.tie_prior(p),
                 iou64: fit_iou64(run, truth, view)?.0,
-                agreement: crate::reconstruct::eval::fit_agreement(&result, run, 128)?,
+                agreement: eval::fit_agreement(&result, run, 128)?,
                 kept: run.loss == result.loss && *p == result.model.params,
                 shape,
             });
         }
     }
     let photo_iou = view_iou(&mesh, fitted, &true_mask(truth, view)?)?;
+    let mask_photo_iou = eval::result_photo_ious(&result, std::slice::from_ref(&for_colours))?
+        .first()
+        .copied()
+        .ok_or_else(|| FitError("a fit without a view".into()))?;
     let colour_de = match photo {
         None => None,
         Some(px) => {
@@ -912,6 +918,7 @@ fn fit_scored(
     Ok(BenchScore {
         iou64: iou,
         photo_iou,
+        mask_photo_iou,
         colour_de,
         agreement,
         runs,

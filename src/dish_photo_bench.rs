@@ -340,7 +340,8 @@ pub fn fit_case(
     let result = session.run()?;
     let mut warnings = seg.warnings.clone();
     let cli_ious = eval::result_photo_ious(&result, &masks)?;
-    if let Some(w) = eval::photo_match_warning(&cli_ious, &["photo".into()]) {
+    let level = eval::photo_match_level(result.model.generator);
+    if let Some(w) = eval::photo_match_warning(&cli_ious, &["photo".into()], level) {
         warnings.push(w);
     }
     let g = result.model.generator;

@@ -607,7 +607,8 @@ fn report_photo_match(
         .map(|(iou, n)| format!("{n} {iou:.3}"))
         .collect();
     println!("photo-view IoU: {}", each.join(", "));
-    if let Some(w) = eval::photo_match_warning(&ious, &names) {
+    let level = eval::photo_match_level(result.model.generator);
+    if let Some(w) = eval::photo_match_warning(&ious, &names, level) {
         eprintln!("procfit: warning: {w}");
     }
     Ok(())
@@ -847,6 +848,7 @@ fn reconstruct_tree(
     }
     if let Some(w) = eval::tree_match_warning(
         iou,
+        eval::photo_match_level(&generators::tree::TreeGenerator),
         "--tree-colors, or give a label image of 0 background, 1 branch, 2 leaf",
     ) {
         eprintln!("warning: {w}");

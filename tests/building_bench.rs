@@ -15,7 +15,8 @@ use procfit::building_bench::{
     BenchScore, Input, PAPER_CAMERAS, case_view, cases, fit_and_score, fit_and_score_input,
     input_mask, paper_building,
 };
-use procfit::reconstruct::eval::agreement_warning;
+use procfit::generators::building::Building;
+use procfit::reconstruct::eval::{agreement_warning, photo_match_level, photo_match_warning};
 use std::path::PathBuf;
 
 /// Quality of the fits here: the default (at the bench's `--quick` 0.4 single-view fits land
@@ -70,8 +71,15 @@ fn check_seeded(name: &str, input: Input, min: f64, seed: u64) -> BenchScore {
     s
 }
 
-/// Measured 0.954 (0.753 before the generator had L footprints). The runs that match the
-/// mask about as well agree on the shape (0.967 measured): no warning.
+/// What the CLI and the page say of how the fit matches its photo (`None`: it matches), from
+/// the fit's photo-view IoU against the mask it was given and the building's level.
+fn match_warning(s: &BenchScore) -> Option<String> {
+    photo_match_warning(&[s.mask_photo_iou], &[], photo_match_level(&Building))
+}
+
+/// Measured 0.958 (0.753 before the generator had L footprints). The runs that match the
+/// mask about as well agree on the shape, and the fit outlines the mask (photo-view IoU 0.987
+/// measured): no warning of either kind.
 #[test]
 fn l_shaped_house_from_its_mask() {
     let s = check("l-hip", Input::Mask, 0.90);
@@ -80,6 +88,21 @@ fn l_shaped_house_from_its_mask() {
         "agreement {:?}",
         s.agreement
     );
+    assert_eq!(match_warning(&s), None);
+}
+
+/// Never a confident wrong answer, where the runs agree: from its mask at seed 3 every run but
+/// one reads the L with flat roofs as a box (IoU-64 0.617 measured, 3D agreement 0.875, above
+/// the agreement's level), but a box cannot outline an L: photo-view IoU 0.955 against the
+/// mask, below the building's level (0.97), where every right fit of the benchmark scores 0.977
+/// or more. The CLI and the page say the model does not match. (With the dish's level, 0.85,
+/// every generator's until the level was the generator's, nothing was said.)
+#[test]
+fn a_box_read_from_an_l_is_said_not_to_match() {
+    let s = check_seeded("l-flat", Input::Mask, 0.5, 3);
+    let w = match_warning(&s);
+    assert!(w.is_some(), "photo-view IoU {}", s.mask_photo_iou);
+    assert!(w.unwrap().contains("check the mask"));
 }
 
 /// The L-shaped house with flat roofs on textured ground, fitted with seed 2: from its one
@@ -98,21 +121,25 @@ fn a_house_whose_shape_the_photo_does_not_fix_is_flagged() {
     let w = agreement_warning(s.agreement);
     assert!(w.is_some(), "agreement {:?}", s.agreement);
     assert!(w.unwrap().contains("add a photo from another side"));
+    // Nor does the kept box outline the L: photo-view IoU 0.943 against its automatic mask.
+    assert!(match_warning(&s).is_some(), "{}", s.mask_photo_iou);
 }
 
-/// Measured 0.975 (0.777 before the generator had shed roofs); the photo on textured ground
-/// goes through the automatic segmentation. The roof's colour measured in the photo (issue 17)
+/// Measured 0.977 (0.777 before the generator had shed roofs); the photo on textured ground
+/// goes through the automatic segmentation, and the fit outlines its automatic mask (0.992):
+/// not said to be a mismatch. The roof's colour measured in the photo (issue 17)
 /// is the colour it was drawn with, ΔE 0.7 (CIE76); the walls come out ΔE 21 darker: the
 /// photo's sun is high, so no wall is seen fully lit, and one photo cannot tell a dark wall
 /// from a wall in the shade.
 #[test]
 fn shed_roof_on_textured_ground() {
     let s = check("shed-studio", Input::Textured, 0.90);
+    assert_eq!(match_warning(&s), None);
     let roof = s.colour_de.and_then(|(_, roof)| roof);
     assert!(roof.is_some_and(|d| d <= 6.0), "roof colour ΔE {roof:?}");
 }
 
-/// Measured 0.924 (0.636 before: the fit took the plain photo's house for an L whose wing hid
+/// Measured 0.925 (0.636 before: the fit took the plain photo's house for an L whose wing hid
 /// behind the main block; Occam's step now tries the rectangle). The segmented mask itself is
 /// the true one within a pixel or two of the outline.
 #[test]
@@ -120,7 +147,7 @@ fn gable_house_on_plain_ground() {
     check("gable-chimney", Input::Plain, 0.90);
 }
 
-/// Measured 0.892 (0.681 before: stage 1 rarely reached an L and the fit settled on a
+/// Measured 0.907 (0.681 before: stage 1 rarely reached an L and the fit settled on a
 /// rectangle; the L house is now an extra seed that joins when it screens better; 0.840 with
 /// three runs).
 #[test]
@@ -128,16 +155,17 @@ fn l_shaped_gable_house_on_plain_ground() {
     check("l-gable", Input::Plain, 0.80);
 }
 
-/// Measured 0.879 (0.594 with three runs, when all three ended in a wrong footprint's basin
-/// at 2.5–3 times the loss of the right one).
+/// Measured 0.811 (0.594 with three runs, when all three ended in a wrong footprint's basin
+/// at 2.5–3 times the loss of the right one; 0.879 when measured with an earlier version).
 #[test]
 fn l_shaped_flat_block_on_plain_ground() {
     check("l-flat", Input::Plain, 0.80);
 }
 
-/// Measured 0.891 / 0.742 / 0.797 (the issue's target, 0.92 each, is not reached yet: the
-/// fitted building matches the photo, photo-view IoU 0.97–0.98, but not the sides it does not
-/// show); the level guards against a regression below that.
+/// Measured 0.939 / 0.935 / 0.946 at this seed (0.891 / 0.742 / 0.797 before the hip roof's
+/// ridge length and the odd restarts' middle ridge; over seeds 0-4 single fits go down to
+/// 0.845, so the issue's 0.92 each is not reached at every seed); the level guards against a
+/// regression below that.
 #[test]
 fn paper_building_from_three_cameras() {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -155,7 +183,7 @@ fn paper_building_from_three_cameras() {
         let s = fit_and_score(&mesh, &view, mask, settings(false)).unwrap();
         eprintln!("paper building at ({yaw}°, {pitch}°): {s:?}");
         assert!(
-            s.iou64 >= 0.70,
+            s.iou64 >= 0.85,
             "paper building at ({yaw}°, {pitch}°): IoU-64 {:.3}",
             s.iou64
         );

@@ -358,7 +358,7 @@ impl MaskExtra {
 
 /// What a generator can do, as data: the CLI, the worker and the page read this instead of
 /// checking generator names.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Capabilities {
     /// How it is fitted to photos; `None`: it is not (the page offers no fit for it).
     pub fit: Option<FitMethod>,
@@ -373,6 +373,11 @@ pub struct Capabilities {
     /// (procfit's `FitConfig::restarts_for`): what one run costs and how often one lands in a
     /// wrong basin decide it. 1 for a fit that does not restart (the tree GA).
     pub fit_runs: usize,
+    /// Below this photo-view IoU (the fitted model through its fitted camera against a
+    /// photo's mask, don't-care excluded) a fit says the model does not match that photo:
+    /// set from how closely a right fit of this generator outlines its photos, so that a
+    /// wrong shape, a wrong kind of object or a mask holding more than the object shows.
+    pub photo_match_level: f64,
 }
 
 /// The reverse-mode derivative of one generated mesh: maps dL/d(positions) to dL/d(params).

@@ -1256,6 +1256,9 @@ impl Generator for TreeGenerator {
             mask_extra: crate::MaskExtra::TreeLabels,
             // The tree GA is one search; its budget is its effort.
             fit_runs: 1,
+            // A tree's outline is ragged (leaf cards against a photo's foliage), so its level
+            // is lower than a solid object's.
+            photo_match_level: 0.8,
         }
     }
     fn generate(&self, params: &[f64], lod: Lod) -> Result<Mesh, GenError> {

@@ -52,7 +52,8 @@ struct ResultOut {
     /// Each photo's photo-view IoU: the model through its fitted camera against the photo's
     /// mask, don't-care excluded (`eval::result_photo_ious`, what the CLI prints).
     photo_ious: Vec<f64>,
-    /// The level below which a photo is said not to be matched (`eval::PHOTO_MATCH_LEVEL`).
+    /// The level below which a photo is said not to be matched (the generator's
+    /// `Capabilities::photo_match_level`).
     match_level: f64,
     /// What is wrong and what to try when a photo is below the level (`None` otherwise).
     match_warning: Option<String>,
@@ -324,12 +325,13 @@ impl FitSession {
             .flat_map(|v| export_camera(v, None).to_floats())
             .collect();
         let photo_ious = eval::result_photo_ious(&r, &self.masks).map_err(js)?;
+        let match_level = eval::photo_match_level(r.model.generator);
         let agreement = self.session.agreement().map_err(js)?;
         let out = ResultOut {
             agreement,
             agreement_warning: eval::agreement_warning(agreement),
-            match_warning: eval::photo_match_warning(&photo_ious, &[]),
-            match_level: eval::PHOTO_MATCH_LEVEL,
+            match_warning: eval::photo_match_warning(&photo_ious, &[], match_level),
+            match_level,
             photo_ious,
             generator: r.model.generator.name(),
             params: r.model.params.clone(),

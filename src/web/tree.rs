@@ -99,7 +99,8 @@ struct ResultOut {
     /// The photo's photo-view IoU (one entry): the tree pixels' silhouette IoU through the
     /// photo's camera, what the CLI prints.
     photo_ious: Vec<f64>,
-    /// The level below which the tree is said not to match (`eval::TREE_MATCH_LEVEL`).
+    /// The level below which the tree is said not to match (the tree generator's
+    /// `Capabilities::photo_match_level`).
     match_level: f64,
     /// The photo-view IoU at the photo's size of the tree as the page shows it (HIGH, its
     /// carved by the photo, `carve`).
@@ -316,14 +317,17 @@ impl TreeFitSession {
             .generate(&fit.params, crate::generators::Lod::High)
             .map_err(js)?;
         let (carved, _) = self.leaf_carve()?.apply(&mesh).map_err(js)?;
+        let match_level =
+            crate::reconstruct::eval::photo_match_level(&crate::generators::tree::TreeGenerator);
         let carved_photo_iou =
             crate::tree::bench::photo_view_iou(&carved, &view, &self.labels).map_err(js)?;
         let out = ResultOut {
             carved_photo_iou,
             photo_ious: vec![iou],
-            match_level: crate::reconstruct::eval::TREE_MATCH_LEVEL,
+            match_level,
             match_warning: crate::reconstruct::eval::tree_match_warning(
                 iou,
+                match_level,
                 "“Adjust the colours” in the mask step",
             ),
             // The tree GA fits the tree generator and no other.

@@ -73,6 +73,7 @@ impl Generator for Prism {
             fitted_lod: Lod::Low,
             mask_extra: procfit::generators::MaskExtra::None,
             fit_runs: 1,
+            photo_match_level: 0.85,
         }
     }
     fn generate(&self, params: &[f64], lod: Lod) -> Result<Mesh, GenError> {
