@@ -469,9 +469,28 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
         result.loss,
         model.lod.index()
     );
+    report_rescue(&session);
     report_photo_match(&result, &masks, &a.images)?;
     report_agreement(agreement);
     Ok(())
+}
+
+/// Says when the fit added runs from other shapes because its first runs' best model did not
+/// match a photo ([`Session::rescue_runs`]), and whether one of them was kept.
+fn report_rescue(session: &Session) {
+    let added = session.rescue_runs();
+    if added == 0 {
+        return;
+    }
+    let first = session.run_results().len() - added;
+    let kept = match session.kept_run() {
+        Some(k) if k >= first => "the model is from one of them",
+        _ => "none matched better, the model is from the first",
+    };
+    println!(
+        "the best of the first {first} fits did not match the photos: {added} more fits from \
+         other shapes ran; {kept}"
+    );
 }
 
 /// Prints how well the photos fix the shape (the 3D agreement of the runs that matched them

@@ -79,7 +79,7 @@ fn match_warning(s: &BenchScore) -> Option<String> {
 
 /// Measured 0.958 (0.753 before the generator had L footprints). The runs that match the
 /// mask about as well agree on the shape, and the fit outlines the mask (photo-view IoU 0.987
-/// measured): no warning of either kind.
+/// measured): no warning of either kind, and no runs added.
 #[test]
 fn l_shaped_house_from_its_mask() {
     let s = check("l-hip", Input::Mask, 0.90);
@@ -89,40 +89,39 @@ fn l_shaped_house_from_its_mask() {
         s.agreement
     );
     assert_eq!(match_warning(&s), None);
+    assert_eq!(s.runs.len(), 6, "no rescue runs for a fit that matches");
 }
 
-/// Never a confident wrong answer, where the runs agree: from its mask at seed 3 every run but
-/// one reads the L with flat roofs as a box (IoU-64 0.617 measured, 3D agreement 0.875, above
-/// the agreement's level), but a box cannot outline an L: photo-view IoU 0.955 against the
-/// mask, below the building's level (0.97), where every right fit of the benchmark scores 0.977
-/// or more. The CLI and the page say the model does not match. (With the dish's level, 0.85,
-/// every generator's until the level was the generator's, nothing was said.)
+/// A box read from an L does not outline it, and then the fit tries L-shaped footprints: the L
+/// with flat roofs on a gradient at seed 4 was kept as a box by all six runs (IoU-64 0.595,
+/// photo-view IoU 0.960 against its automatic mask, below the building's level 0.97); the two
+/// runs the fit adds from the generator's rescue seeds find the L (0.988 measured, 0.992), and
+/// one of them is kept.
 #[test]
-fn a_box_read_from_an_l_is_said_not_to_match() {
-    let s = check_seeded("l-flat", Input::Mask, 0.5, 3);
-    let w = match_warning(&s);
-    assert!(w.is_some(), "photo-view IoU {}", s.mask_photo_iou);
-    assert!(w.unwrap().contains("check the mask"));
+fn a_box_that_does_not_outline_its_photo_is_refitted_from_l_seeds() {
+    let s = check_seeded("l-flat", Input::Gradient, 0.90, 4);
+    assert_eq!(s.runs.len(), 8, "six runs and two rescue runs");
+    let kept = s.runs.iter().position(|r| r.kept);
+    assert!(kept.is_some_and(|k| k >= 6), "kept run {kept:?}");
+    assert_eq!(match_warning(&s), None);
 }
 
-/// The L-shaped house with flat roofs on textured ground, fitted with seed 2: from its one
-/// view the fit's runs match the photo about as well with different shapes (3D agreement 0.649
-/// measured; the kept one scores IoU-64 0.585). The CLI and the page must say so rather than
-/// present the fit as the building. (This was the L with hip roofs on plain ground at the
-/// default seed, agreement 0.770 at IoU-64 0.718, until every other restart held the hip
-/// ridge at the middle: a gable box of IoU-64 0.731 is kept there now and the only run near
-/// its loss is an L, which the tie prior ranks below it, so nothing is said — a miss. Before
-/// that it was the house with two dormers on a gradient, agreement 0.789, until the hip
-/// roof's ridge length; before that the five-storey block on a gradient, until the generator
-/// had chimneys. The agreement only sees what the runs disagree on.)
+/// The house with two dormers on textured ground, fitted with seed 1: from its one view the
+/// fit's runs match the photo about as well with different shapes (3D agreement 0.832
+/// measured; the kept one scores IoU-64 0.866, photo-view IoU 0.968). The CLI and the page
+/// must say so rather than present the fit as the building. (This was the L with flat roofs on
+/// textured ground at seed 2, agreement 0.649 at IoU-64 0.585, until the fit added runs from
+/// L-shaped footprints when the kept box does not outline the photo: they find the L's wing
+/// (0.741, agreement 0.942). Before that the L with hip roofs on plain ground at the default
+/// seed until every other restart held the hip ridge at the middle; the house with two dormers
+/// on a gradient until the hip roof's ridge length; the five-storey block on a gradient until
+/// the generator had chimneys. The agreement only sees what the runs disagree on.)
 #[test]
 fn a_house_whose_shape_the_photo_does_not_fix_is_flagged() {
-    let s = check_seeded("l-flat", Input::Textured, 0.5, 2);
+    let s = check_seeded("gable-dormers", Input::Textured, 0.8, 1);
     let w = agreement_warning(s.agreement);
     assert!(w.is_some(), "agreement {:?}", s.agreement);
     assert!(w.unwrap().contains("add a photo from another side"));
-    // Nor does the kept box outline the L: photo-view IoU 0.943 against its automatic mask.
-    assert!(match_warning(&s).is_some(), "{}", s.mask_photo_iou);
 }
 
 /// Measured 0.977 (0.777 before the generator had shed roofs); the photo on textured ground

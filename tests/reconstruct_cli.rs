@@ -444,23 +444,57 @@ fn a_fit_reports_how_well_it_matches_the_photo_and_warns_when_poorly() {
     );
 }
 
-/// Never a confident wrong answer: the L-shaped block with flat roofs on textured ground (the
-/// building benchmark's, drawn without procfit's generator), fitted with seed 2: from one view
-/// the fit's runs disagree in 3D (0.649 measured; the kept one scores IoU-64 0.585 against the
-/// truth), and the kept box outlines the photo at 0.943, below the building's level. The CLI
-/// prints both and says what to do. (This was the L with hip roofs on plain ground at the
-/// default seed until every other restart held the hip ridge at the middle — its kept run, a
-/// gable box, has no run near its loss that the tie prior ranks as high, so no agreement is
-/// said; see tests/building_bench.rs — before that the house with two dormers on a gradient
-/// until the hip roof's ridge length, the five-storey block on a gradient until the generator
-/// had chimneys, and the block on textured ground until the segmentation kept the wall below
-/// its lowest windows.)
+/// A building is boxes and planes: a round outline (a disc, 100 × 120 pixels) is no building's.
+/// The first six fits' best does not match it, so the fit adds two from L-shaped footprints
+/// (`Session::rescue_runs`) and says so; none matches (photo-view IoU 0.934 measured, below the
+/// building's level 0.97), and the CLI says that too, with what to try.
+#[test]
+fn a_building_fit_that_cannot_match_tries_other_shapes_and_says_so() {
+    let disc = scratch("disc.png");
+    write_png(&disc, 200, 200, |x, y| {
+        let (dx, dy) = ((f64::from(x) - 100.0) / 50.0, (f64::from(y) - 100.0) / 60.0);
+        if dx * dx + dy * dy <= 1.0 { 255 } else { 0 }
+    });
+    let (said, err) = run_ok(&[
+        "reconstruct",
+        "--generator",
+        "building",
+        s(&disc),
+        "-o",
+        s(&scratch("disc.glb")),
+    ]);
+    assert!(
+        said.contains("the best of the first 6 fits did not match the photos: 2 more fits"),
+        "{said}"
+    );
+    let iou: f64 = said
+        .lines()
+        .find_map(|l| l.strip_prefix("photo-view IoU: "))
+        .and_then(|l| l.rsplit(' ').next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no photo-view IoU in {said}"));
+    assert!(iou < 0.97, "{said}");
+    assert!(
+        err.contains("warning: the model does not match") && err.contains("(below 0.97)"),
+        "{err}"
+    );
+}
+
+/// Never a confident wrong answer: the house with two dormers on textured ground (the building
+/// benchmark's, drawn without procfit's generator), fitted with seed 1: from one view the fit's
+/// runs disagree in 3D (0.832 measured; the kept one scores IoU-64 0.866 against the truth).
+/// The CLI prints the agreement and says what to do. (This was the L with flat roofs on
+/// textured ground at seed 2 until the fit added runs from L-shaped footprints when the kept
+/// box does not outline the photo; before that the L with hip roofs on plain ground, the house
+/// with two dormers on a gradient, the five-storey block on a gradient and the block on
+/// textured ground, each until a change to the fit found their shape or one like it; see
+/// tests/building_bench.rs.)
 #[test]
 fn a_fit_the_photo_does_not_fix_says_so() {
     let case = procfit::building_bench::cases()
         .unwrap()
         .into_iter()
-        .find(|c| c.name == "l-flat")
+        .find(|c| c.name == "gable-dormers")
         .unwrap();
     let px = procfit::building_bench::photo(
         &case.mesh,
@@ -468,19 +502,19 @@ fn a_fit_the_photo_does_not_fix_says_so() {
         procfit::building_bench::Input::Textured,
     )
     .unwrap();
-    let photo = scratch("l-flat-textured.png");
+    let photo = scratch("gable-dormers-textured.png");
     image::RgbaImage::from_raw(case.view.width, case.view.height, px)
         .unwrap()
         .save(&photo)
         .unwrap();
-    let out = scratch("l-flat-textured.glb");
+    let out = scratch("gable-dormers-textured.glb");
     let fov = case.view.params.fov_y.to_string();
     let (said, err) = run_ok(&[
         "reconstruct",
         "--generator",
         "building",
         "--seed",
-        "2",
+        "1",
         "--fov",
         &fov,
         s(&photo),
@@ -497,11 +531,6 @@ fn a_fit_the_photo_does_not_fix_says_so() {
     assert!(
         err.contains("warning: the photo does not fix the shape")
             && err.contains("add a photo from another side"),
-        "{err}"
-    );
-    // Nor does the kept box outline the L (photo-view IoU 0.943, below the building's 0.97).
-    assert!(
-        err.contains("warning: the model does not match") && err.contains("(below 0.97)"),
         "{err}"
     );
 }

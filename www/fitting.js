@@ -156,7 +156,9 @@ export class FitRunner extends EventTarget {
     // A fit makes a few runs from different seeds side by side and keeps the best: say so.
     // The stage and curve are the first unfinished run's; when it changes, its curves start
     // afresh (the outline shown is the best finished run's once there is one).
-    const tries = p.runs > 1 ? ` (best of ${p.runs} fits run side by side)` : '';
+    // When the first fits' best did not match the photo, the core adds fits from other shapes.
+    const added = p.rescue_runs > 0 ? `, ${p.rescue_runs} added from other shapes because the best did not match the photo` : '';
+    const tries = p.runs > 1 ? ` (best of ${p.runs} fits run side by side${added})` : '';
     if (p.run !== undefined && p.run !== this.lastRun) {
       this.lastRun = p.run;
       this.curves = { 1: [], 2: [], 3: [] };

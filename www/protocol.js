@@ -72,7 +72,9 @@ export const REQUESTS = Object.freeze({
   // a mask's `windows` (labels as MASK_WINDOWS_* give them) adds the window term of a building.
   // (`cameras` as GENERATE_GLB takes them). On the way:
   // event 'progress' { stage, generator, iteration, evaluations, work_done, work_total,
-  // best_loss, params, done, preview: { width, height, coverage: ArrayBuffer } | null }.
+  // best_loss, params, run, runs, rescue_runs (of `runs`, those added from other shapes because
+  // the first runs' best did not match a photo), done,
+  // preview: { width, height, coverage: ArrayBuffer } | null }.
   FIT_RUN: 'fit/run',
   FIT_CANCEL: 'fit/cancel', // { fitId } → { found }: the running fit (or tree fit) stops after its slice
   // Trees (paper §3.5), from one photo's colours inside its mask. `rgba`: the photo at the mask's

@@ -1593,6 +1593,31 @@ impl Generator for Building {
         (out, 0..0)
     }
 
+    /// The L-shaped house with flat, gable and hip roofs (`ROOF_TYPES` 0, 1, 2), its wing at
+    /// either end: when the kept fit does not outline the photo, it is most often a box read
+    /// from an L (the building benchmark's L with flat roofs, a shed-roofed box in five of six
+    /// runs). Measured in procfit's `Session` doc: of 8 such fits over five seeds, 7 better
+    /// (0.556 → 0.882, 0.580 → 0.969, 0.595 → 0.988, …), none worse.
+    fn rescue_seeds(&self) -> Vec<Vec<f64>> {
+        let Some(l) = self
+            .presets()
+            .into_iter()
+            .find(|p| p.values[idx::FOOTPRINT] == 1.0)
+        else {
+            return Vec::new();
+        };
+        let mut out = Vec::new();
+        for roof in [0.0, 1.0, 2.0] {
+            for side in [0.0, 1.0] {
+                let mut v = l.values.clone();
+                v[idx::ROOF_TYPE] = roof;
+                v[idx::WING_SIDE] = side;
+                out.push(v);
+            }
+        }
+        out
+    }
+
     fn differentiable(&self) -> bool {
         true
     }

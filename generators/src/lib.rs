@@ -476,6 +476,14 @@ pub trait Generator: Send + Sync {
         &[]
     }
 
+    /// Stage 1's seeds for the runs a fit adds when its kept model does not match a photo
+    /// (its photo-view IoU below [`Capabilities::photo_match_level`]): shapes the regular
+    /// seeds' search rarely reaches and a wrong kept fit often misses (a building's L-shaped
+    /// footprints). Empty by default: no runs are added.
+    fn rescue_seeds(&self) -> Vec<Vec<f64>> {
+        Vec::new()
+    }
+
     /// Continuous parameters that refine a shape the seeds already make (a hip roof's ridge
     /// length): stage 1's mutation never changes them, only the gradient steps (stage 1's local
     /// searches, stages 2 and 3, whose steps are longer for them) move them from the seeds'

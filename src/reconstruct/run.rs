@@ -108,16 +108,26 @@ fn work_weight(side: u32) -> f64 {
     r * r
 }
 
+/// How a run's stage 1 is seeded.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Seeding {
+    /// The seeds' refined-only variables at the middle of their range ([`refined_at_middle`]).
+    pub refined_middle: bool,
+    /// The generator's [`rescue_seeds`](crate::generators::Generator::rescue_seeds) instead of
+    /// its seeds (its seeds when it has none).
+    pub rescue: bool,
+}
+
 impl Run {
     /// Starts run `config` (its own seed) of a fit of `masks` checked into `plan` (by
-    /// [`FitConfig::plan`]); with `refined_middle`, the seeds' refined-only variables at the
-    /// middle of their range ([`refined_at_middle`]). Nothing is evaluated yet. Errors only
-    /// when no seed of a generator can be placed in the views, or on a bad search domain.
+    /// [`FitConfig::plan`]), its stage 1 seeded as `seeding` says. Nothing is evaluated yet.
+    /// Errors only when no seed of a generator can be placed in the views, or on a bad search
+    /// domain.
     pub(super) fn new(
         config: FitConfig,
         masks: Vec<Mask>,
         plan: &Plan,
-        refined_middle: bool,
+        seeding: Seeding,
     ) -> Result<Run, FitError> {
         let Plan {
             windows,
@@ -138,13 +148,17 @@ impl Run {
         };
         let mut searches = Vec::new();
         for (k, &g) in candidates.iter().enumerate() {
-            let shapes = |s: Vec<Vec<f64>>| match refined_middle {
+            let shapes = |s: Vec<Vec<f64>>| match seeding.refined_middle {
                 true => refined_at_middle(g, s),
                 false => s,
             };
+            let own_seeds = match seeding.rescue {
+                true => Some(g.rescue_seeds()).filter(|s| !s.is_empty()),
+                false => None,
+            };
             let (layout, domain, seeds) = start_points(
                 g,
-                shapes(g.seeds()),
+                shapes(own_seeds.unwrap_or_else(|| g.seeds())),
                 start.as_deref(),
                 stats,
                 &fov,
@@ -505,6 +519,7 @@ impl Run {
             cameras,
             run: 1,
             runs: 1,
+            rescue_runs: 0,
             done: self.is_done(),
         }
     }

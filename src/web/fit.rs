@@ -35,6 +35,9 @@ struct StepOut {
     /// stepped side by side; the best one is the result).
     run: usize,
     runs: usize,
+    /// Of `runs`, those added from other shapes because the first runs' best model did not
+    /// match a photo (`Session::rescue_runs`).
+    rescue_runs: usize,
     done: bool,
 }
 
@@ -252,6 +255,7 @@ impl FitSession {
             params: p.params,
             run: p.run,
             runs: p.runs,
+            rescue_runs: p.rescue_runs,
             done: p.done,
         };
         serde_wasm_bindgen::to_value(&out).map_err(js)
