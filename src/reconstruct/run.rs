@@ -109,7 +109,7 @@ fn work_weight(side: u32) -> f64 {
 }
 
 /// How a run's stage 1 is seeded.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug)]
 pub(super) struct Seeding {
     /// The seeds' refined-only variables at the middle of their range ([`refined_at_middle`]).
     pub refined_middle: bool,

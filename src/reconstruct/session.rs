@@ -18,7 +18,7 @@
 //! side and keeps the best.
 
 use super::FitError;
-use super::config::FitConfig;
+use super::config::{FitConfig, Plan};
 use super::run::{Run, Seeding};
 use crate::camera::{View, ViewParams};
 use crate::generators::TIE_TOLERANCE;
@@ -198,6 +198,27 @@ fn run_seed(seed: u64, k: usize) -> u64 {
     seed.wrapping_add((k as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15))
 }
 
+/// Run `k` of a fit of `masks` checked into `plan`: its own seed ([`run_seed`]), the
+/// refined-only variables at the middle of their range in the odd runs, from the generator's
+/// rescue seeds when `rescue`.
+fn start_run(
+    config: &FitConfig,
+    k: usize,
+    masks: &[Mask],
+    plan: &Plan,
+    rescue: bool,
+) -> Result<Run, FitError> {
+    let c = FitConfig {
+        seed: run_seed(config.seed, k),
+        ..config.clone()
+    };
+    let seeding = Seeding {
+        refined_middle: k % 2 == 1,
+        rescue,
+    };
+    Run::new(c, masks.to_vec(), plan, seeding)
+}
+
 impl Session {
     /// Starts a fit of `masks` (one per view, all the same size). Nothing is evaluated yet.
     /// Errors on an unknown or non-differentiable generator, no masks or too many, masks of
@@ -210,18 +231,9 @@ impl Session {
             masks
         };
         let plan = config.plan(&masks)?;
-        let mut runs = Vec::with_capacity(config.restarts);
-        for k in 0..config.restarts {
-            let c = FitConfig {
-                seed: run_seed(config.seed, k),
-                ..config.clone()
-            };
-            let seeding = Seeding {
-                refined_middle: k % 2 == 1,
-                rescue: false,
-            };
-            runs.push(Run::new(c, masks.clone(), &plan, seeding)?);
-        }
+        let runs = (0..config.restarts)
+            .map(|k| start_run(&config, k, &masks, &plan, false))
+            .collect::<Result<Vec<_>, _>>()?;
         Ok(Session {
             finished: vec![None; runs.len()],
             config,
@@ -260,16 +272,8 @@ impl Session {
         let plan = config.plan(&self.masks)?;
         for _ in 0..RESCUE_RUNS {
             let k = self.runs.len();
-            let c = FitConfig {
-                seed: run_seed(config.seed, k),
-                ..config.clone()
-            };
-            let seeding = Seeding {
-                refined_middle: k % 2 == 1,
-                rescue: true,
-            };
             self.runs
-                .push(Run::new(c, self.masks.clone(), &plan, seeding)?);
+                .push(start_run(&config, k, &self.masks, &plan, true)?);
             self.finished.push(None);
         }
         Ok(true)
