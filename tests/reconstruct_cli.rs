@@ -403,6 +403,15 @@ fn a_negative_number_is_a_bad_value_not_a_missing_flag() {
     );
 }
 
+/// The last photo's photo-view IoU in what `reconstruct` printed.
+fn last_photo_view_iou(said: &str) -> f64 {
+    said.lines()
+        .find_map(|l| l.strip_prefix("photo-view IoU: "))
+        .and_then(|l| l.rsplit(' ').next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no photo-view IoU in {said}"))
+}
+
 /// Issue 16: a fit that cannot match its photo was reported as fitted, with nothing else. Now
 /// every fit prints its photo-view IoU, and a poor one gets a warning with what to try: an
 /// L-shaped mask has no lathed (dish) model.
@@ -431,12 +440,7 @@ fn a_fit_reports_how_well_it_matches_the_photo_and_warns_when_poorly() {
         "-o",
         s(&out),
     ]);
-    let iou: f64 = said
-        .lines()
-        .find_map(|l| l.strip_prefix("photo-view IoU: "))
-        .and_then(|l| l.rsplit(' ').next())
-        .and_then(|v| v.parse().ok())
-        .unwrap_or_else(|| panic!("no photo-view IoU in {said}"));
+    let iou = last_photo_view_iou(&said);
     assert!(iou < 0.85, "{said}");
     assert!(
         err.contains("warning: the model does not match") && err.contains("check the mask"),
@@ -467,12 +471,7 @@ fn a_building_fit_that_cannot_match_tries_other_shapes_and_says_so() {
         said.contains("the best of the first 6 fits did not match the photos: 2 more fits"),
         "{said}"
     );
-    let iou: f64 = said
-        .lines()
-        .find_map(|l| l.strip_prefix("photo-view IoU: "))
-        .and_then(|l| l.rsplit(' ').next())
-        .and_then(|v| v.parse().ok())
-        .unwrap_or_else(|| panic!("no photo-view IoU in {said}"));
+    let iou = last_photo_view_iou(&said);
     assert!(iou < 0.97, "{said}");
     assert!(
         err.contains("warning: the model does not match") && err.contains("(below 0.97)"),
