@@ -28,10 +28,11 @@ const messageOf = (id) => page.evaluate((id) => {
   return m.hidden ? '' : m.textContent;
 }, id);
 
-/** Fits the photos as they are with the quick effort; resolves when the page is at rest. */
-async function quickFit() {
+/** Fits the photos as they are at `effort` (the quick one by default); resolves when the
+ * page is at rest. */
+async function fitPhotos(effort = '0.25') {
   await page.evaluate(() => delete document.body.dataset.fitted);
-  await page.selectOption('#fit-quality', '0.25');
+  await page.selectOption('#fit-quality', effort);
   await page.waitForSelector('#fit-start:not([disabled])', { timeout: 60000 });
   await page.click('#fit-start');
   await page.waitForFunction(() => document.body.dataset.fitted, null, { timeout: 180000 });
@@ -41,6 +42,23 @@ async function quickFit() {
 /** The numbers in the match message. */
 const numbersOf = (text) => [...text.matchAll(/\b[01]\.\d\d\b/g)].map((m) => Number(m[0]));
 
+/**
+ * A PNG, `width` × `height`, of a dark shape on a light wall: one path of ellipses, each
+ * `[cx, cy, rx, ry, anticlockwise]` (an anticlockwise one inside a clockwise one cuts a hole).
+ */
+const drawnPhoto = (width, height, ellipses) => page.evaluate(async ({ width, height, ellipses }) => {
+  const c = new OffscreenCanvas(width, height);
+  const ctx = c.getContext('2d');
+  ctx.fillStyle = '#e8e4dc';
+  ctx.fillRect(0, 0, width, height);
+  ctx.fillStyle = '#3a3f66';
+  ctx.beginPath();
+  for (const [x, y, rx, ry, ccw] of ellipses) ctx.ellipse(x, y, rx, ry, 0, 0, 2 * Math.PI, ccw);
+  ctx.fill();
+  const blob = await c.convertToBlob({ type: 'image/png' });
+  return [...new Uint8Array(await blob.arrayBuffer())];
+}, { width, height, ellipses });
+
 const waitForMask = () =>
   page.waitForFunction(() => /Object found|check the mask/.test(document.getElementById('mask-state').textContent), null, { timeout: 60000 });
 
@@ -49,7 +67,7 @@ test('a cup fitted as a dish is said to match its photo, with the number', async
   await waitForMask();
   await page.check('#gen-dish');
   assert.equal(await messageOf('fit-match'), '', 'nothing is said before a fit');
-  await quickFit();
+  await fitPhotos();
   const said = await messageOf('fit-match');
   assert.match(said, /How well the fitted model matches the photo/);
   const [iou] = numbersOf(said);
@@ -63,23 +81,11 @@ test('a cup fitted as a dish is said to match its photo, with the number', async
 test('an object the dish cannot be is said not to match, with what to do', async () => {
   // A flat ring (a quoit) seen face on, dark on a light wall: a dish's outline has no hole
   // this large, so no cup, bowl or glass matches it, whatever the fit does.
-  const png = await page.evaluate(async () => {
-    const c = new OffscreenCanvas(640, 480);
-    const ctx = c.getContext('2d');
-    ctx.fillStyle = '#e8e4dc';
-    ctx.fillRect(0, 0, 640, 480);
-    ctx.fillStyle = '#3a3f66';
-    ctx.beginPath();
-    ctx.arc(320, 240, 170, 0, 2 * Math.PI);
-    ctx.arc(320, 240, 115, 0, 2 * Math.PI, true);
-    ctx.fill();
-    const blob = await c.convertToBlob({ type: 'image/png' });
-    return [...new Uint8Array(await blob.arrayBuffer())];
-  });
+  const png = await drawnPhoto(640, 480, [[320, 240, 170, 170, false], [320, 240, 115, 115, true]]);
   await page.setInputFiles('#file', { name: 'ring.png', mimeType: 'image/png', buffer: Buffer.from(png) });
   await waitForMask();
   await page.check('#gen-dish');
-  await quickFit();
+  await fitPhotos();
   const said = await messageOf('fit-match');
   const [iou] = numbersOf(said);
   assert.ok(iou < 0.85, `photo-view IoU ${iou} in: ${said}`);
@@ -95,28 +101,12 @@ test('a building fit that cannot outline the photo tries other shapes, then says
   // A round tower seen as a disc, dark on a light wall: no box or L outlines it at the
   // building's level (0.97), so the six runs' best is not kept as it is: the core adds two
   // runs from L footprints (the page's progress says so), and then says it does not match.
-  const png = await page.evaluate(async () => {
-    const c = new OffscreenCanvas(400, 400);
-    const ctx = c.getContext('2d');
-    ctx.fillStyle = '#e8e4dc';
-    ctx.fillRect(0, 0, 400, 400);
-    ctx.fillStyle = '#3a3f66';
-    ctx.beginPath();
-    ctx.ellipse(200, 200, 100, 120, 0, 0, 2 * Math.PI);
-    ctx.fill();
-    const blob = await c.convertToBlob({ type: 'image/png' });
-    return [...new Uint8Array(await blob.arrayBuffer())];
-  });
+  const png = await drawnPhoto(400, 400, [[200, 200, 100, 120, false]]);
   await page.click('#thumbs li:last-child .remove');
   await page.setInputFiles('#file', { name: 'disc.png', mimeType: 'image/png', buffer: Buffer.from(png) });
   await waitForMask();
   await page.check('#gen-building');
-  await page.evaluate(() => delete document.body.dataset.fitted);
-  await page.selectOption('#fit-quality', '1');
-  await page.waitForSelector('#fit-start:not([disabled])', { timeout: 60000 });
-  await page.click('#fit-start');
-  await page.waitForFunction(() => document.body.dataset.fitted, null, { timeout: 300000 });
-  assert.equal(await page.evaluate(() => document.body.dataset.fitted), 'done', await messageOf('fit-message'));
+  await fitPhotos('1');
   const stage = await page.evaluate(() => document.getElementById('fit-stage').textContent);
   assert.match(stage, /best of 8 fits run side by side, 2 added from other shapes because the best did not match the photo/);
   const said = await messageOf('fit-match');
