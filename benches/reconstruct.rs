@@ -4,8 +4,8 @@
 //! table of medians over several random cameras. Run with `cargo bench --bench reconstruct`;
 //! `-- WORD …` runs only the objects whose name contains one of the words (`-- building`);
 //! `-- --threads N` runs one thread count only; `-- --cameras N` fits N cameras (4);
-//! `-- --each` prints a line per camera (its yaw and elevation, the IoU-64 and the fitted
-//! parameters) and per run (loss, tie prior, fitted yaw and elevation, IoU-64, IoU-64 against
+//! `-- --each` prints a line per camera (its yaw and elevation, the IoU-64, the photo-view IoU
+//! against the mask as the CLI prints it, and the fitted parameters) and per run (loss, tie prior, fitted yaw and elevation, IoU-64, IoU-64 against
 //! the kept run, the parameters: enough to re-apply another choice among the runs to the same
 //! runs without fitting again); `-- --fill-holes` fills the masks' holes (a mug handle's)
 //! before fitting, to measure what the hole tells the fit.
@@ -139,9 +139,15 @@ fn main() {
                 times.push(t0.elapsed().as_secs_f64());
                 ious.push(fit_iou64(&r, mesh, truth));
                 if each {
+                    // What the CLI prints and checks against the generator's level.
+                    let photo = procfit::reconstruct::eval::result_photo_ious(
+                        &r,
+                        std::slice::from_ref(mask),
+                    )
+                    .unwrap()[0];
                     eprintln!(
                         "  {name}: camera yaw {:.0}°, elevation {:.0}° (fitted {:.0}°, {:.0}°): \
-                         IoU-64 {:.3}, params {:.3?}",
+                         IoU-64 {:.3}, photo-view IoU {photo:.3}, params {:.3?}",
                         truth.yaw.to_degrees(),
                         truth.pitch.to_degrees(),
                         r.views[0].params.yaw.to_degrees(),
