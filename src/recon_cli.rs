@@ -487,9 +487,18 @@ fn report_rescue(session: &Session) {
         Some(k) if k >= first => "the model is from one of them",
         _ => "none matched better, the model is from the first",
     };
+    let ious: Vec<String> = session
+        .rescued_from()
+        .iter()
+        .map(|iou| format!("{iou:.3}"))
+        .collect();
     println!(
-        "the best of the first {first} fits did not match the photos: {added} more fits from \
-         other shapes ran; {kept}"
+        "the best of the first {first} fits did not match the photos (photo-view IoU {}, below \
+         {:.2}): {added} more fits from other shapes ran; {kept}",
+        ious.join(", "),
+        session
+            .result()
+            .map_or(f64::NAN, |r| eval::photo_match_level(r.model.generator)),
     );
 }
 

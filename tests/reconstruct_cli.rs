@@ -468,7 +468,8 @@ fn a_building_fit_that_cannot_match_tries_other_shapes_and_says_so() {
         s(&scratch("disc.glb")),
     ]);
     assert!(
-        said.contains("the best of the first 6 fits did not match the photos: 2 more fits"),
+        said.contains("the best of the first 6 fits did not match the photos (photo-view IoU 0.")
+            && said.contains("below 0.97): 2 more fits from other shapes ran"),
         "{said}"
     );
     let iou = last_photo_view_iou(&said);

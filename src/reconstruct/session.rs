@@ -127,6 +127,9 @@ pub struct Session {
     runs: Vec<Run>,
     /// Whether the runs were checked for [`RESCUE_RUNS`] once all were done.
     rescue_checked: bool,
+    /// The first runs' best model's photo-view IoU per photo when rescue runs were added
+    /// because one was below the level ([`Session::rescued_from`]); empty otherwise.
+    rescued_from: Vec<f64>,
     /// Each finished run's result and last progress.
     finished: Vec<Option<(FitResult, Progress)>>,
     /// The best finished run ([`pick`]), an index into `finished`.
@@ -240,6 +243,7 @@ impl Session {
             masks,
             runs,
             rescue_checked: false,
+            rescued_from: Vec::new(),
             best: None,
         })
     }
@@ -276,6 +280,7 @@ impl Session {
                 .push(start_run(&config, k, &self.masks, &plan, true)?);
             self.finished.push(None);
         }
+        self.rescued_from = ious;
         Ok(true)
     }
 
@@ -393,6 +398,12 @@ impl Session {
     /// ([`RESCUE_RUNS`] or 0; they come after the first [`FitConfig::restarts`]).
     pub fn rescue_runs(&self) -> usize {
         self.runs.len() - self.config.restarts
+    }
+
+    /// When runs were added ([`Session::rescue_runs`]): the first runs' best model's
+    /// photo-view IoU per photo (one or more below the generator's level); empty otherwise.
+    pub fn rescued_from(&self) -> &[f64] {
+        &self.rescued_from
     }
 
     /// The index of the run [`Session::result`] keeps (`None` before any run finished): one of
