@@ -31,7 +31,9 @@ use procfit::building_bench::{
     input_mask, paper_building,
 };
 use procfit::generators::Generator;
-use procfit::reconstruct::eval::{AGREEMENT_LEVEL, agreement_warning, photo_match_level};
+use procfit::reconstruct::eval::{
+    AGREEMENT_LEVEL, agreement_warning, photo_match_level, photo_match_warning,
+};
 use std::path::PathBuf;
 
 /// One fitted row: IoU-64, photo-view IoU, seconds.
@@ -40,6 +42,15 @@ type Row = (f64, f64, f64);
 /// One fit's IoU-64 and whether the CLI warns about it: that the mask does not fix the shape,
 /// that the model does not match the photo.
 type Warned = (f64, bool, bool);
+
+/// [`Warned`] of a fit `s`, with the building's photo-match `level`, as the CLI judges it.
+fn warned_of(s: &BenchScore, level: f64) -> Warned {
+    (
+        s.iou64,
+        agreement_warning(s.agreement).is_some(),
+        photo_match_warning(&[s.mask_photo_iou], &[], level).is_some(),
+    )
+}
 
 /// The agreement column: the number, or "–" without one.
 fn agreement_cell(a: Option<f64>) -> String {
@@ -124,11 +135,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         agreement_cell(s.agreement)
                     );
                     print_runs(&s);
-                    warned.push((
-                        s.iou64,
-                        agreement_warning(s.agreement).is_some(),
-                        s.mask_photo_iou < level,
-                    ));
+                    warned.push(warned_of(&s, level));
                     let row = (s.iou64, s.photo_iou, secs);
                     match sums.iter_mut().find(|x| x.0 == input) {
                         Some(x) => x.1.push(row),
@@ -191,11 +198,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                                 agreement_cell(s.agreement)
                             );
                             print_runs(&s);
-                            warned.push((
-                                s.iou64,
-                                agreement_warning(s.agreement).is_some(),
-                                s.mask_photo_iou < level,
-                            ));
+                            warned.push(warned_of(&s, level));
                         }
                         Err(e) => println!("| {yaw:.0}, {pitch:.0} | mask | failed: {e} | 0 | |"),
                     }

@@ -469,15 +469,16 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
         result.loss,
         model.lod.index()
     );
-    report_rescue(&session);
+    report_rescue(&session, &result);
     report_photo_match(&result, &masks, &a.images)?;
     report_agreement(agreement);
     Ok(())
 }
 
 /// Says when the fit added runs from other shapes because its first runs' best model did not
-/// match a photo ([`Session::rescue_runs`]), and whether one of them was kept.
-fn report_rescue(session: &Session) {
+/// match a photo ([`Session::rescue_runs`]), and whether one of them was kept (`result`, the
+/// fit's).
+fn report_rescue(session: &Session, result: &reconstruct::FitResult) {
     let added = session.rescue_runs();
     if added == 0 {
         return;
@@ -496,9 +497,7 @@ fn report_rescue(session: &Session) {
         "the best of the first {first} fits did not match the photos (photo-view IoU {}, below \
          {:.2}): {added} more fits from other shapes ran; {kept}",
         ious.join(", "),
-        session
-            .result()
-            .map_or(f64::NAN, |r| eval::photo_match_level(r.model.generator)),
+        eval::photo_match_level(result.model.generator),
     );
 }
 

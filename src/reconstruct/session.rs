@@ -253,20 +253,20 @@ impl Session {
     /// [`photo_match_level`](crate::generators::Capabilities::photo_match_level)) and the
     /// generator has [`rescue_seeds`](crate::generators::Generator::rescue_seeds), adds
     /// [`RESCUE_RUNS`] runs from them (not for a quick preview's single run, nor for a refit,
-    /// which keeps the user's model). Returns whether it added any.
-    fn add_rescue_runs(&mut self) -> Result<bool, FitError> {
+    /// which keeps the user's model).
+    fn add_rescue_runs(&mut self) -> Result<(), FitError> {
         if self.config.restarts < 2 || self.config.start.is_some() {
-            return Ok(false);
+            return Ok(());
         }
         let kept = self.result()?;
         let g = kept.model.generator;
         if g.rescue_seeds().is_empty() {
-            return Ok(false);
+            return Ok(());
         }
-        let level = g.capabilities().photo_match_level;
+        let level = super::eval::photo_match_level(g);
         let ious = super::eval::result_photo_ious(&kept, &self.masks)?;
         if ious.iter().all(|&iou| iou >= level) {
-            return Ok(false);
+            return Ok(());
         }
         // `auto` chose its generator: the rescue fits that one.
         let config = FitConfig {
@@ -281,7 +281,7 @@ impl Session {
             self.finished.push(None);
         }
         self.rescued_from = ious;
-        Ok(true)
+        Ok(())
     }
 
     /// Whether the fit is finished.
@@ -314,7 +314,7 @@ impl Session {
         if self.is_done() && !self.rescue_checked {
             self.rescue_checked = true;
             // A rescue that cannot start leaves the fit as it is: it is done and kept.
-            self.add_rescue_runs().unwrap_or(false);
+            self.add_rescue_runs().unwrap_or_default();
         }
         self.progress()
     }
