@@ -6,7 +6,7 @@
 //! Per case there are four inputs: the clean mask (the mesh's silhouette through
 //! [`crate::render`], binarised) and three photo-like images of it — on a plain background, on
 //! a sky-and-ground gradient and on textured ground (grass and cobble noise seen in
-//! perspective) — each segmented by [`crate::segment::segment_auto`] as the CLI does with a
+//! perspective) — each segmented by [`crate::segment::segment_auto_with`] as the CLI does with a
 //! user's photo. The photos are drawn by [`LabelRenderer`] with one label per part and shade
 //! (flat Lambert shading under a fixed sun), composited over the background with noise.
 //!
@@ -734,8 +734,9 @@ pub fn photo(mesh: &Mesh, view: &View, input: Input) -> Result<Vec<u8>, FitError
     Ok(out)
 }
 
-/// The mask a user's photo gives: the photo through [`segment::segment_auto`], as the CLI does
-/// (the automatic cut, [`segment::Segmentation::mask`]).
+/// The mask a user's photo gives: the photo through [`segment::segment_auto_with`] with the
+/// building's options, as the CLI does for `--generator building` (the automatic cut,
+/// [`segment::Segmentation::mask`]).
 pub fn segmented(view: &View, rgba: &[u8]) -> Result<Mask, FitError> {
     Ok(segment_photo(view, rgba)?.1.mask)
 }
@@ -744,7 +745,8 @@ pub fn segmented(view: &View, rgba: &[u8]) -> Result<Mask, FitError> {
 fn segment_photo(view: &View, rgba: &[u8]) -> Result<(Photo, segment::Segmentation), FitError> {
     let e = |x: segment::SegmentError| FitError(x.0);
     let p = Photo::from_rgba(view.width, view.height, rgba, segment::WORKING_SIDE).map_err(e)?;
-    let seg = segment::segment_auto(&p).map_err(e)?;
+    let opts = segment::Options::for_generator(Some(&crate::generators::building::Building));
+    let seg = segment::segment_auto_with(&p, &opts).map_err(e)?;
     Ok((p, seg))
 }
 

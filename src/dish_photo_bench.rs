@@ -11,7 +11,7 @@
 //! `mask_full.png` its whole silhouette.
 //!
 //! Each case is fitted as `procfit reconstruct photo.png --generator dish [--fov F]` does:
-//! the photo decoded at the working size, [`segment::segment_auto`], the dish fit at its
+//! the photo decoded at the working size, [`segment::segment_auto_with`], the dish fit at its
 //! default settings ([`FitConfig`]; small extras such as a spoon made don't care; the photo's
 //! brightness for the rim term, [`crate::reconstruct::rim`]). Scores:
 //! - the automatic mask's IoU against the true visible mask (the hard cut, every pixel);
@@ -294,10 +294,16 @@ pub fn rim_aspect(positions: &[Vec3]) -> f64 {
     }
 }
 
-/// The automatic segmentation of the case's photo, as the CLI makes it (decoded at the
-/// working size, [`segment::segment_auto`]).
+/// The automatic segmentation of the case's photo, as the CLI makes it for `--generator dish`
+/// (decoded at the working size, [`segment::segment_auto_with`] with the dish's options).
 pub fn auto_segmentation(case: &BenchCase) -> Result<segment::Segmentation, FitError> {
-    segment::segment_auto(&decoded(case)?).map_err(|x| FitError(x.0))
+    segment_decoded(&decoded(case)?)
+}
+
+/// [`auto_segmentation`] of the decoded photo.
+fn segment_decoded(photo: &Photo) -> Result<segment::Segmentation, FitError> {
+    let opts = segment::Options::for_generator(Some(&crate::generators::dish::Dish));
+    segment::segment_auto_with(photo, &opts).map_err(|x| FitError(x.0))
 }
 
 /// The case's photo decoded at the working size, as the CLI decodes it.
@@ -316,7 +322,7 @@ pub fn fit_case(
 ) -> Result<BenchScore, FitError> {
     // Decoded once: segmented, and its brightness for the rim term.
     let photo = decoded(case)?;
-    let seg = segment::segment_auto(&photo).map_err(|x| FitError(x.0))?;
+    let seg = segment_decoded(&photo)?;
     let luma = Luma::from_rgba(photo.width(), photo.height(), photo.rgba())?;
     if (seg.mask.width(), seg.mask.height()) != (case.mask.width(), case.mask.height()) {
         return Err(FitError(format!(

@@ -151,9 +151,9 @@ fn exif_fov(bytes: &[u8], width: u32, height: u32) -> Option<f64> {
 }
 
 /// A mask from an image file: a mask image when it is grey and nearly binary or has
-/// transparency, else a photo segmented automatically.
-fn load_mask(path: &Path) -> Result<Mask, String> {
-    Ok(load_view(path)?.mask)
+/// transparency, else a photo segmented automatically with `opts`.
+fn load_mask(path: &Path, opts: &segment::Options) -> Result<Mask, String> {
+    Ok(load_view(path, opts)?.mask)
 }
 
 /// An image file's bytes and its pixels as RGBA, at full size (the tree labels' path); a
@@ -193,8 +193,8 @@ pub(crate) struct LoadedView {
 const DONT_CARE_LEVEL: u8 = 128;
 
 /// A view's mask, warnings printed on stderr (see [`read_view`]).
-fn load_view(path: &Path) -> Result<LoadedView, String> {
-    let view = read_view(path)?;
+fn load_view(path: &Path, opts: &segment::Options) -> Result<LoadedView, String> {
+    let view = read_view(path, opts)?;
     for w in &view.warnings {
         eprintln!("procfit: {}: {w}", path.display());
     }
@@ -205,8 +205,9 @@ fn load_view(path: &Path) -> Result<LoadedView, String> {
 /// scaled DCT decode), so a 4000×3000 mask costs what a 512² one does: a mask image (grey and
 /// nearly binary, or with transparency) becomes soft coverage — the share of object pixels
 /// under each working pixel — with grey [`DONT_CARE_LEVEL`] as don't care, and a photo is
-/// segmented automatically. Nothing is printed: the warnings are returned.
-pub(crate) fn read_view(path: &Path) -> Result<LoadedView, String> {
+/// segmented automatically with `opts` (the object kind's, [`segment::Options::for_generator`]).
+/// Nothing is printed: the warnings are returned.
+pub(crate) fn read_view(path: &Path, opts: &segment::Options) -> Result<LoadedView, String> {
     let bytes = read(path)?;
     let at = |e: &dyn std::fmt::Display| format!("{}: {e}", path.display());
     let photo = Photo::decode(&bytes, segment::WORKING_SIDE)
@@ -243,7 +244,7 @@ pub(crate) fn read_view(path: &Path) -> Result<LoadedView, String> {
         rgba = None;
         coverage(&px.chunks_exact(4).map(|p| p[0]).collect::<Vec<_>>(), true)?
     } else {
-        let seg = segment::segment_auto(&photo).map_err(|e| at(&e))?;
+        let seg = segment::segment_auto_with(&photo, opts).map_err(|e| at(&e))?;
         warnings.clone_from(&seg.warnings);
         let mask = seg.mask.clone();
         segmentation = Some(seg);
@@ -271,10 +272,10 @@ pub(crate) fn read_view(path: &Path) -> Result<LoadedView, String> {
 
 /// The views' masks, all at one size. Views of one aspect ratio but different sizes are brought
 /// to the smallest; views of different aspect ratios are refused, naming the files' own sizes.
-fn load_views(paths: &[PathBuf]) -> Result<Vec<LoadedView>, String> {
+fn load_views(paths: &[PathBuf], opts: &segment::Options) -> Result<Vec<LoadedView>, String> {
     let mut views = paths
         .iter()
-        .map(|p| load_view(p))
+        .map(|p| load_view(p, opts))
         .collect::<Result<Vec<_>, _>>()?;
     let Some(first) = views.first() else {
         return Ok(views);
@@ -390,7 +391,9 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
     if a.tree_colors.is_some() {
         return Err("--tree-colors is for --generator tree".into());
     }
-    let views = load_views(&a.images)?;
+    // A photo is cut for the object kind when it is named (`auto` chooses it after the cut).
+    let seg_opts = segment::Options::for_generator(generators::by_name(&generator));
+    let views = load_views(&a.images, &seg_opts)?;
     // --fov wins, then the photo's EXIF focal length, then the default.
     let fov_y = views.iter().map(|v| a.fov.or(v.fov)).collect();
     let (masks, pixels): (Vec<Mask>, Vec<Option<Vec<u8>>>) =
@@ -1031,7 +1034,9 @@ pub fn eval(a: &EvalArgs) -> Result<(), String> {
         best.0.to_degrees()
     );
     if let Some(mask_path) = &a.mask {
-        let mask = load_mask(mask_path)?;
+        // A photo is cut for the kind of object the model is, when the file says.
+        let kind = model.doc().and_then(|d| generators::by_name(&d.generator));
+        let mask = load_mask(mask_path, &segment::Options::for_generator(kind))?;
         let cam = model
             .cameras
             .first()
@@ -1075,7 +1080,11 @@ mod tests {
     /// decode, as soft coverage.
     #[test]
     fn a_large_mask_is_loaded_at_the_working_size() {
-        let v = load_view(&disc_png("big.png", 4000, 3000)).expect("loads");
+        let v = load_view(
+            &disc_png("big.png", 4000, 3000),
+            &segment::Options::default(),
+        )
+        .expect("loads");
         assert_eq!((v.mask.width(), v.mask.height()), (512, 384));
         assert_eq!(v.file_size, (4000, 3000));
         let soft = v
@@ -1095,12 +1104,13 @@ mod tests {
     #[test]
     fn views_of_one_aspect_share_a_size_and_other_aspects_are_refused() {
         let (a, b) = (disc_png("a.png", 640, 480), disc_png("b.png", 320, 240));
-        let views = load_views(&[a.clone(), b]).expect("same aspect");
+        let opts = segment::Options::default();
+        let views = load_views(&[a.clone(), b], &opts).expect("same aspect");
         for v in &views {
             assert_eq!((v.mask.width(), v.mask.height()), (320, 240));
         }
         let c = disc_png("c.png", 480, 480);
-        let err = load_views(&[a, c]).err().expect("other aspect");
+        let err = load_views(&[a, c], &opts).err().expect("other aspect");
         assert!(err.contains("480×480") && err.contains("640×480"), "{err}");
         assert!(err.contains("aspect ratio"), "{err}");
     }

@@ -78,19 +78,17 @@ fn write_grey(path: &Path, width: u32, height: u32, levels: Vec<u8>) -> Result<(
 
 /// `procfit segment`: the mask (and the generator's extras) out, confidence and warnings said.
 pub fn segment(a: &SegmentArgs) -> Result<(), String> {
-    let extra = if a.generator == "auto" {
-        MaskExtra::None
+    let kind = if a.generator == "auto" {
+        None
     } else {
-        generators::by_name(&a.generator)
-            .ok_or_else(|| {
-                format!(
-                    "unknown generator `{}` (see `procfit generators`)",
-                    a.generator
-                )
-            })?
-            .capabilities()
-            .mask_extra
+        Some(generators::by_name(&a.generator).ok_or_else(|| {
+            format!(
+                "unknown generator `{}` (see `procfit generators`)",
+                a.generator
+            )
+        })?)
     };
+    let extra = kind.map_or(MaskExtra::None, |g| g.capabilities().mask_extra);
     if a.tree_colors.is_some() && extra != MaskExtra::TreeLabels {
         return Err("--tree-colors is for a generator fitted to tree labels".into());
     }
@@ -132,7 +130,8 @@ pub fn segment(a: &SegmentArgs) -> Result<(), String> {
     match &labels_out {
         Some(path) => write_tree(a, path)?,
         None => {
-            let view = recon_cli::read_view(&a.image)?;
+            // Cut as `reconstruct --generator` of the same kind cuts it.
+            let view = recon_cli::read_view(&a.image, &segment::Options::for_generator(kind))?;
             for w in &view.warnings {
                 eprintln!("procfit: {name}: {w}");
             }

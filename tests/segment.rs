@@ -447,6 +447,29 @@ fn a_wall_lit_unevenly_on_every_side_still_gives_a_mask() {
     assert!(!seg.is_low_confidence(), "{:?}", seg.warnings);
 }
 
+/// An outline smoothing outside (0, 1] is refused with a message, not a panic or a mask cut
+/// without smoothness.
+#[test]
+fn an_outline_smoothing_out_of_range_is_refused() {
+    let (img, _) = render(&cup_scene(Bg::Plain), 3);
+    let photo = Photo::decode(&jpeg(&img, 90), WORKING_SIDE).unwrap();
+    for v in [0.0, -0.5, 1.5, f32::NAN, f32::INFINITY] {
+        let opts = Options {
+            outline_smoothing: v,
+            ..Options::default()
+        };
+        let err = Session::automatic(&photo, &opts)
+            .err()
+            .unwrap_or_else(|| panic!("{v} accepted"));
+        assert!(err.0.contains("outline smoothing"), "{v}: {}", err.0);
+    }
+    let opts = Options {
+        outline_smoothing: 1.0,
+        ..Options::default()
+    };
+    assert!(Session::automatic(&photo, &opts).is_ok());
+}
+
 /// A grey cup (the espresso cup's colour) over [`Bg::Planks`].
 fn planks_scene() -> Scene {
     Scene {

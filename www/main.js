@@ -63,7 +63,7 @@ async function boot() {
       renderPhotos();
       reviveMasks();
       // Photos saved before their mask was ready get one now.
-      state.photos.filter((p) => !p.mask).forEach(findMask);
+      state.photos.filter((p) => !p.mask).forEach((p) => findMask(p));
     },
     openModel: chooseGenerator,
   });

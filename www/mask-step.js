@@ -3,9 +3,9 @@
 // photo (and the windows that follow it), the mask's state line and the correction tools.
 import { REQUESTS } from './protocol.js';
 import { say } from './ui.js';
-import { MaskEditor, autoMask, reviveMask } from './masking.js';
+import { MaskEditor, autoMask, recutMask, reviveMask } from './masking.js';
 import { windowsAfterMask } from './window-labels.js';
-import { $, client, state, selectedPhoto } from './page.js';
+import { $, client, state, selectedPhoto, specOf, fitGenerator } from './page.js';
 import { persist } from './persistence.js';
 import { renderWindowTools } from './windows-ui.js';
 import { renderTreeLabels } from './tree-colors-ui.js';
@@ -25,14 +25,38 @@ export const maskEditor = new MaskEditor({
 window.procfit.maskEditor = maskEditor;
 
 /**
- * Runs the automatic mask for `photo`, keeping the page told.
- * @param {import('./page.js').Photo} photo
+ * The object kind chosen (a generator's name), which automatic masks are cut for; `undefined`
+ * when the fit is to pick it (the default cut).
  */
-export async function findMask(photo) {
+const chosenKind = () => specOf(fitGenerator())?.name;
+
+/**
+ * Whether `photo`'s mask was cut otherwise than the chosen kind cuts it. With the kind left to
+ * the fit, or a mask saved by an older page (which does not say how it was cut), the mask stays.
+ */
+const cutForAnotherKind = (/** @type {import('./page.js').Photo} */ photo) => {
+  const wanted = specOf(fitGenerator())?.outline_smoothing;
+  const had = photo.mask?.outline_smoothing;
+  return wanted != null && had != null && had !== wanted;
+};
+
+/**
+ * Runs the automatic mask for `photo` (cut for the chosen kind), keeping the page told. With
+ * `recut`, the photo's corrections are replayed on the new cut (the kind changed) instead of
+ * being dropped (the person asked for the automatic mask again).
+ * @param {import('./page.js').Photo} photo
+ * @param {{ recut?: boolean }} [o]
+ */
+export async function findMask(photo, { recut = false } = {}) {
   photo.maskState = 'working';
   renderMaskState();
   try {
-    await autoMask(client, photo);
+    await photo.reviving;
+    // The kind may change while the worker cuts: then the photo is cut again for the new one.
+    do {
+      const kind = chosenKind();
+      await (recut ? recutMask(client, photo, kind) : autoMask(client, photo, { generator: kind }));
+    } while (cutForAnotherKind(photo) && state.photos.includes(photo));
     // A new mask: windows found automatically are found again, painted ones clipped to it.
     await windowsAfterMask(client, photo);
     photo.maskState = 'ready';
@@ -47,6 +71,17 @@ export async function findMask(photo) {
   if (state.selected === photo.id) maskEditor.setPhoto(photo);
   renderMaskState();
   persist();
+}
+
+/**
+ * After the object kind changed: each photo whose mask was cut for a kind with another outline
+ * smoothing is cut again for this one, its corrections replayed (a mask being cut now checks
+ * the kind itself when it is done).
+ */
+export function recutForKind() {
+  for (const p of state.photos) {
+    if (p.mask && p.maskState !== 'working' && cutForAnotherKind(p)) findMask(p, { recut: true });
+  }
 }
 
 /**

@@ -25,42 +25,68 @@ const TINT = {
 };
 
 /**
- * Asks the worker for `photo`'s automatic mask; stores it on the photo. With `keep`, a mask the
+ * Asks the worker for `photo`'s automatic mask, cut for the object kind `generator` (a
+ * generator's name: a building's outline follows the photo further into corners than a
+ * dish's); stores it on the photo with the kind (`photo.maskFor`). With `keep`, a mask the
  * photo already has (restored from storage) is kept and only the worker's session is made, so
  * later corrections have something to re-cut.
+ * @param {any} client
+ * @param {import('./page.js').Photo} photo
+ * @param {{ keep?: boolean, generator?: string }} [o]
  */
-export async function autoMask(client, photo, { keep = false } = {}) {
+export async function autoMask(client, photo, { keep = false, generator } = {}) {
   const c = new OffscreenCanvas(photo.width, photo.height);
   const ctx = c.getContext('2d');
   ctx.drawImage(photo.bitmap, 0, 0);
   const rgba = ctx.getImageData(0, 0, photo.width, photo.height).data.buffer;
   const m = await client.call(
     REQUESTS.MASK_AUTO,
-    { key: String(photo.id), width: photo.width, height: photo.height, rgba },
+    { key: String(photo.id), width: photo.width, height: photo.height, rgba, generator },
     { transfer: [rgba] },
   );
   if (!(keep && photo.mask)) {
     setMask(photo, m);
     photo.edits = [];
+    photo.maskFor = generator;
   }
   return photo.mask;
+}
+
+/** The worker requests that replay `photo`'s corrections, back to back; the last gives the mask. */
+function replayEdits(client, photo) {
+  const key = String(photo.id);
+  return (photo.edits ?? []).map((e) =>
+    e.rect
+      ? client.call(REQUESTS.MASK_RECT, { key, rect: e.rect })
+      : client.call(REQUESTS.MASK_STROKE, { key, object: e.object, points: e.points, radius: e.radius }),
+  );
 }
 
 /**
  * Gives `photo` a worker session again and replays its corrections into it (after a reload or
  * a worker restart). The requests go out back to back, so any correction the person makes
  * meanwhile queues behind them in the worker. The photo's mask stays as stored (the replay
- * gives the same one).
+ * gives the same one: the session is cut for the kind the mask was, `photo.maskFor`).
  */
 export async function reviveMask(client, photo) {
-  const auto = autoMask(client, photo, { keep: true });
-  const key = String(photo.id);
-  const replays = (photo.edits ?? []).map((e) =>
-    e.rect
-      ? client.call(REQUESTS.MASK_RECT, { key, rect: e.rect })
-      : client.call(REQUESTS.MASK_STROKE, { key, object: e.object, points: e.points, radius: e.radius }),
-  );
-  await Promise.all([auto, ...replays]);
+  const auto = autoMask(client, photo, { keep: true, generator: photo.maskFor });
+  await Promise.all([auto, ...replayEdits(client, photo)]);
+}
+
+/**
+ * Cuts `photo`'s mask again for the object kind `generator` and replays its corrections on the
+ * new cut (the person's box and strokes still say what they said). Don't-care strokes stay.
+ * @param {any} client
+ * @param {import('./page.js').Photo} photo
+ * @param {string} generator
+ */
+export async function recutMask(client, photo, generator) {
+  const edits = photo.edits ?? [];
+  await autoMask(client, photo, { generator });
+  photo.edits = edits;
+  const replies = await Promise.all(replayEdits(client, photo));
+  if (replies.length) setMask(photo, replies[replies.length - 1]);
+  return photo.mask;
 }
 
 /** `photo`'s RGBA pixels at its mask's (working) size, as an ArrayBuffer. */

@@ -11,6 +11,7 @@ import { persist } from './persistence.js';
 import { renderWindowTools } from './windows-ui.js';
 import { renderTreeLabels } from './tree-colors-ui.js';
 import { updateFitButton } from './fit-step.js';
+import { recutForKind } from './mask-step.js';
 
 const modelMessage = $('model-message');
 const outMessage = $('out-message');
@@ -67,6 +68,8 @@ export function chooseGenerator(name, { params = null, lod = null, preset = unde
   renderWindowTools();
   renderTreeLabels();
   updateFitButton();
+  // Automatic masks are cut for the object kind (a building's outline is cut closer).
+  recutForKind();
 }
 
 $('preset').addEventListener('change', (e) => {

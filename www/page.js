@@ -18,6 +18,7 @@ import { REQUESTS } from './protocol.js';
  * @property {string} display_name what the generator choice shows
  * @property {number} fitted_lod the least level of detail (0..3) a fitted model opens at
  * @property {'none' | 'windows' | 'tree_labels'} mask_extra the mask tools its fit reads
+ * @property {number} outline_smoothing how smooth its automatic masks' outlines are cut
  * @property {{ name: string, label: string, group: string, unit: string, min: number, max: number, default: number, kind: string, choices: string[] }[]} params
  * @property {{ name: string, label: string, values: number[] }[]} presets
  */
@@ -33,6 +34,8 @@ import { REQUESTS } from './protocol.js';
  * @property {number} confidence
  * @property {boolean} low_confidence
  * @property {string[]} warnings
+ * @property {number} [outline_smoothing] how smooth the cut's outline is (the kind's it was cut
+ *   for; absent in masks saved by an older page)
  * @property {OffscreenCanvas} dontCare the don't-care strokes (alpha > 0: ignored by the fit)
  */
 
@@ -68,6 +71,8 @@ import { REQUESTS } from './protocol.js';
  * @property {'working' | 'ready' | 'failed'} [maskState]
  * @property {string} [maskError]
  * @property {MaskEdit[]} [edits] the corrections since the automatic mask
+ * @property {string} [maskFor] the object kind (generator name) the automatic mask was cut for;
+ *   none: the default cut (the kind was left to the fit)
  * @property {Promise<void>} [reviving] the worker session being made again
  * @property {WindowLabels | null} [windows]
  * @property {string} [windowsNote] what the last mask correction did to the windows

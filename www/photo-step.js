@@ -225,8 +225,10 @@ async function openSample(s) {
   try {
     const res = await fetch(`www/samples/${s.file}`);
     if (!res.ok) throw new Error(`the sample is missing (${res.status})`);
-    addPhoto(await photoOf(await res.blob(), s.file));
+    const photo = await photoOf(await res.blob(), s.file);
+    // The kind first: the sample's mask is then cut for it.
     if (state.specs.some((g) => g.name === s.generator)) chooseGenerator(s.generator);
+    addPhoto(photo);
   } catch (err) {
     say(photosMessage, `Could not open the sample: ${err.message}`);
   }

@@ -39,7 +39,7 @@ export const REQUESTS = Object.freeze({
   // Masks, one session per photo `key` (a string the page chooses). Each answers
   // { width, height, bbox, confidence, low_confidence, warnings, codes: ArrayBuffer } with the
   // mask in working pixels: object 255, background 0, don't care 128.
-  MASK_AUTO: 'mask/auto', //   { key, width, height, rgba: ArrayBuffer } → mask (automatic)
+  MASK_AUTO: 'mask/auto', //   { key, width, height, rgba: ArrayBuffer, generator? } → mask (automatic, cut for that kind)
   MASK_RECT: 'mask/rect', //   { key, rect: [x0, y0, x1, y1] } → mask (start over from a box)
   MASK_STROKE: 'mask/stroke', // { key, object: bool, points: [x, y, …], radius } → mask
   MASK_DROP: 'mask/drop', //   { key } → {} (the photo was removed)

@@ -63,8 +63,10 @@ export async function photoRecord(p) {
     blob: p.blob,
     focal35mm: p.focal35mm ?? null,
     mask: null,
-    // Corrections since the automatic mask, replayed into the worker's session on restore.
+    // Corrections since the automatic mask, replayed into the worker's session on restore,
+    // which is cut for the same object kind as the automatic mask was.
     edits: p.edits ?? [],
+    maskFor: p.maskFor ?? null,
     // Window labels (buildings), the strokes they came from and the wall strokes that erased
     // windows found automatically (applied again when a mask correction finds them again).
     windows: p.windows ? { codes: p.windows.codes, strokes: p.windows.strokes ?? [], erased: p.windows.erased ?? [] } : null,
@@ -90,6 +92,7 @@ export async function photoFromRecord(rec) {
     blob: rec.blob,
     focal35mm: rec.focal35mm ?? null,
     edits: Array.isArray(rec.edits) ? rec.edits : [],
+    maskFor: typeof rec.maskFor === 'string' ? rec.maskFor : undefined,
     windows: rec.windows?.codes
       ? { codes: new Uint8Array(rec.windows.codes), strokes: rec.windows.strokes ?? [], erased: Array.isArray(rec.windows.erased) ? rec.windows.erased : [] }
       : null,

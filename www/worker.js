@@ -45,10 +45,10 @@ const handlers = {
     text: wasm.paramsJson(generator, Float64Array.from(params), lod, partColors(colors, useColors)),
   }),
   [REQUESTS.OPEN_MODEL]: ({ bytes }) => wasm.openModel(new Uint8Array(bytes)),
-  [REQUESTS.MASK_AUTO]: ({ key, width, height, rgba }) => {
+  [REQUESTS.MASK_AUTO]: ({ key, width, height, rgba, generator }) => {
     masks.get(key)?.free();
     masks.delete(key);
-    const session = new wasm.MaskSession(width, height, new Uint8Array(rgba));
+    const session = new wasm.MaskSession(width, height, new Uint8Array(rgba), generator ?? undefined);
     masks.set(key, session);
     return maskOut(session);
   },

@@ -378,6 +378,11 @@ pub struct Capabilities {
     /// set from how closely a right fit of this generator outlines its photos, so that a
     /// wrong shape, a wrong kind of object or a mask holding more than the object shows.
     pub photo_match_level: f64,
+    /// How much of the automatic mask's smoothness its last cut near the outline keeps
+    /// (procfit's `segment::Options::outline_smoothing`, in (0, 1]): lower lets the photo's
+    /// colours carry the outline into a corner where a shaded wall meets ground of a similar
+    /// colour, higher keeps a rounded outline from taking in reflections and table grain.
+    pub outline_smoothing: f32,
 }
 
 /// The reverse-mode derivative of one generated mesh: maps dL/d(positions) to dL/d(params).

@@ -1259,6 +1259,9 @@ impl Generator for TreeGenerator {
             // A tree's outline is ragged (leaf cards against a photo's foliage), so its level
             // is lower than a solid object's.
             photo_match_level: 0.8,
+            // The segmentation's default: a tree is fitted to its colour labels; the cut only
+            // bounds them.
+            outline_smoothing: 0.5,
         }
     }
     fn generate(&self, params: &[f64], lod: Lod) -> Result<Mesh, GenError> {

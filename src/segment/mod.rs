@@ -146,9 +146,12 @@ pub fn segment(photo: &Photo) -> Result<Segmentation, SegmentError> {
 
 /// Automatic segmentation with default options.
 pub fn segment_auto(photo: &Photo) -> Result<Segmentation, SegmentError> {
-    Ok(Session::automatic(photo, &Options::default())?
-        .segmentation()
-        .clone())
+    segment_auto_with(photo, &Options::default())
+}
+
+/// Automatic segmentation with `opts` (an object kind's: [`Options::for_generator`]).
+pub fn segment_auto_with(photo: &Photo, opts: &Options) -> Result<Segmentation, SegmentError> {
+    Ok(Session::automatic(photo, opts)?.segmentation().clone())
 }
 
 /// Alpha below this is background, above [`ALPHA_OBJECT`] object, between don't care.

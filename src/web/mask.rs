@@ -14,6 +14,8 @@ use wasm_bindgen::prelude::*;
 pub struct MaskSession {
     photo: Photo,
     session: Session,
+    /// The object kind's segmentation options, for a new start from a rectangle too.
+    opts: Options,
 }
 
 /// What the page shows next to a mask.
@@ -26,6 +28,8 @@ struct MaskInfo {
     confidence: f32,
     low_confidence: bool,
     warnings: Vec<String>,
+    /// The outline smoothing the session cuts with (its object kind's).
+    outline_smoothing: f32,
 }
 
 impl MaskSession {
@@ -46,12 +50,25 @@ impl MaskSession {
 #[wasm_bindgen]
 impl MaskSession {
     /// Segments a `width`×`height` RGBA photo automatically (downscaled to the working size
-    /// first). Errors are messages for the user (too small, bad length, nothing found…).
+    /// first), cut for the object kind `generator` (a generator's name; `undefined` or an
+    /// unknown name: the default cut). Errors are messages for the user (too small, bad
+    /// length, nothing found…).
     #[wasm_bindgen(constructor)]
-    pub fn new(width: u32, height: u32, rgba: &[u8]) -> Result<MaskSession, JsError> {
+    pub fn new(
+        width: u32,
+        height: u32,
+        rgba: &[u8],
+        generator: Option<String>,
+    ) -> Result<MaskSession, JsError> {
         let photo = Photo::from_rgba(width, height, rgba, WORKING_SIDE).map_err(js)?;
-        let session = Session::automatic(&photo, &Options::default()).map_err(js)?;
-        Ok(MaskSession { photo, session })
+        let kind = generator.as_deref().and_then(crate::generators::by_name);
+        let opts = Options::for_generator(kind);
+        let session = Session::automatic(&photo, &opts).map_err(js)?;
+        Ok(MaskSession {
+            photo,
+            session,
+            opts,
+        })
     }
 
     /// Starts over from a rectangle around the object (GrabCut proper: outside is background),
@@ -59,7 +76,7 @@ impl MaskSession {
     #[wasm_bindgen(js_name = setRect)]
     pub fn set_rect(&mut self, x0: u32, y0: u32, x1: u32, y1: u32) -> Result<(), JsError> {
         let rect = BBox { x0, y0, x1, y1 };
-        self.session = Session::with_rect(&self.photo, rect, &Options::default()).map_err(js)?;
+        self.session = Session::with_rect(&self.photo, rect, &self.opts).map_err(js)?;
         Ok(())
     }
 
@@ -144,7 +161,7 @@ impl MaskSession {
         self.session.segmentation().mask.to_luma8()
     }
 
-    /// `{ width, height, bbox, confidence, low_confidence, warnings }`.
+    /// `{ width, height, bbox, confidence, low_confidence, warnings, outline_smoothing }`.
     pub fn info(&self) -> Result<JsValue, JsError> {
         let s = self.session.segmentation();
         let info = MaskInfo {
@@ -154,6 +171,7 @@ impl MaskSession {
             confidence: s.confidence,
             low_confidence: s.is_low_confidence(),
             warnings: s.warnings.clone(),
+            outline_smoothing: self.opts.outline_smoothing,
         };
         serde_wasm_bindgen::to_value(&info).map_err(js)
     }

@@ -106,6 +106,9 @@ pub fn generator_specs() -> Result<JsValue, JsError> {
         fitted_lod: u8,
         /// `none`, `windows` or `tree_labels`: the mask tools its fit reads.
         mask_extra: &'static str,
+        /// The automatic mask's outline smoothing for this kind (a photo's mask is cut again
+        /// when the kind changes to one with another).
+        outline_smoothing: f32,
         /// Serialised by the generators crate (`ParamSpec`, `Preset`).
         params: &'static [crate::generators::ParamSpec],
         presets: Vec<crate::generators::Preset>,
@@ -122,6 +125,7 @@ pub fn generator_specs() -> Result<JsValue, JsError> {
             display_name: caps.display_name,
             fitted_lod: caps.fitted_lod as u8,
             mask_extra: caps.mask_extra.as_str(),
+            outline_smoothing: caps.outline_smoothing,
             params: g.params(),
             presets: g.presets(),
         })

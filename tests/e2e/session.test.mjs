@@ -110,6 +110,9 @@ const codeAt = ([fx, fy]) =>
     return m.codes[Math.floor(fy * m.height) * m.width + Math.floor(fx * m.width)];
   }, [fx, fy]);
 
+/** A point of the bowl that the first correction below cuts off (fractions of the photo). */
+let cut;
+
 test('a correction made before a reload still counts after it', async () => {
   // The first correction: a background stroke across the left part of the bowl.
   const [x0, y0, x1, y1] = await page.evaluate(() => {
@@ -118,7 +121,7 @@ test('a correction made before a reload still counts after it', async () => {
     return [a / m.width, b / m.height, c / m.width, d / m.height];
   });
   const y = (y0 + y1) / 2;
-  const cut = [x0 + 0.2 * (x1 - x0), y];
+  cut = [x0 + 0.2 * (x1 - x0), y];
   assert.equal(await codeAt(cut), 255, 'the bowl should start as object there');
   await brush('background', [[x0 + 0.12 * (x1 - x0), y], [x0 + 0.28 * (x1 - x0), y]]);
   assert.equal(await codeAt(cut), 0, 'the background stroke did not cut the bowl');
@@ -162,6 +165,44 @@ test('the worker dies mid-session: it is replaced and the session goes on', asyn
   assert.equal(await page.isHidden('#photos-message'), true, await page.textContent('#photos-message'));
   await page.check('input[name="tool"][value="none"]');
   log.consoleErrors = log.consoleErrors.filter((m) => !/deliberate panic|unreachable|RuntimeError/.test(m));
+});
+
+test('another kind of object cuts the mask again for itself, the corrections kept', async () => {
+  const photo0 = () => page.evaluate(() => {
+    const p = window.procfit.state.photos[0];
+    return { maskFor: p.maskFor, state: p.maskState, edits: p.edits.length };
+  });
+  const was = await photo0();
+  assert.equal(was.maskFor, 'dish', 'the bowl sample is cut for a dish');
+  // A kind whose masks are cut as a dish's (a tree's) leaves the mask as it is.
+  const codes = await page.evaluateHandle(() => window.procfit.state.photos[0].mask.codes);
+  await page.check('#gen-tree');
+  await settled();
+  assert.equal(await page.evaluate((c) => window.procfit.state.photos[0].mask.codes === c, codes), true);
+  assert.equal((await photo0()).maskFor, 'dish');
+  // A building's mask is cut closer to its outline: the photo is cut again, and the person's
+  // corrections are replayed on the new cut.
+  await page.check('#gen-building');
+  await page.waitForFunction(
+    (c) => {
+      const p = window.procfit.state.photos[0];
+      return p.maskFor === 'building' && p.maskState === 'ready' && p.mask.codes !== c;
+    },
+    codes,
+    { timeout: 60000 },
+  );
+  assert.equal((await photo0()).edits, was.edits, 'the corrections were dropped');
+  assert.equal(await codeAt(cut), 0, 'the first correction no longer cuts the bowl');
+  // The kind the mask was cut for is kept: a reload revives the same cut.
+  const changedAt = await page.evaluate(() => Date.now());
+  await page.waitForFunction((t) => Number(document.body.dataset.saved || 0) > t, changedAt, { timeout: 20000 });
+  await page.reload();
+  await ready();
+  assert.deepEqual(await photo0(), { maskFor: 'building', state: 'ready', edits: was.edits });
+  assert.equal(await codeAt(cut), 0, 'the stored mask lost the correction');
+  await page.check('#gen-dish');
+  await page.waitForFunction(() => window.procfit.state.photos[0].maskFor === 'dish' && window.procfit.state.photos[0].maskState === 'ready', null, { timeout: 60000 });
+  assert.equal(await codeAt(cut), 0);
 });
 
 test('"Start over" clears the saved session', async () => {

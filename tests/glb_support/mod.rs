@@ -74,6 +74,7 @@ impl Generator for Prism {
             mask_extra: procfit::generators::MaskExtra::None,
             fit_runs: 1,
             photo_match_level: 0.85,
+            outline_smoothing: 0.5,
         }
     }
     fn generate(&self, params: &[f64], lod: Lod) -> Result<Mesh, GenError> {
