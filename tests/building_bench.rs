@@ -107,20 +107,30 @@ fn a_box_that_does_not_outline_its_photo_is_refitted_from_l_seeds() {
     assert_eq!(match_warning(&s), None);
 }
 
-/// The house with two dormers on textured ground, fitted with seed 1: from its one view the
-/// fit's runs match the photo about as well with different shapes (3D agreement 0.764
-/// measured; the kept one scores IoU-64 0.894, photo-view IoU 0.972 against its mask; 0.832,
-/// 0.866 and 0.968 before the building's photos were cut closer to their outline). The CLI and the page
-/// must say so rather than present the fit as the building. (This was the L with flat roofs on
-/// textured ground at seed 2, agreement 0.649 at IoU-64 0.585, until the fit added runs from
-/// L-shaped footprints when the kept box does not outline the photo: they find the L's wing
-/// (0.741, agreement 0.942). Before that the L with hip roofs on plain ground at the default
-/// seed until every other restart held the hip ridge at the middle; the house with two dormers
-/// on a gradient until the hip roof's ridge length; the five-storey block on a gradient until
-/// the generator had chimneys. The agreement only sees what the runs disagree on.)
+/// The hip-roofed bungalow seen from its end at eye level (2° up), from its mask: one view shows
+/// neither its length nor its ridge, and the fit's runs match the mask about as well with
+/// different shapes (3D agreement 0.618 measured; the kept one scores IoU-64 0.675). The CLI and
+/// the page must say so rather than present the fit as the building. (This was the house with
+/// two dormers on textured ground at seed 1 until the building's photos were cut closer to
+/// their outline: it is fitted right now, 0.920, and of the benchmark's fits over five seeds
+/// only the paper's building from (140°, 28°) at seed 3 is warned. Before that the L with flat
+/// roofs on textured ground at seed 2 until the fit added runs from L-shaped footprints, the L
+/// with hip roofs on plain ground at the default seed until every other restart held the hip
+/// ridge at the middle; the house with two dormers on a gradient until the hip roof's ridge
+/// length; the five-storey block on a gradient until the generator had chimneys. The agreement
+/// only sees what the runs disagree on: seen straight from the front at eye level the flat
+/// block, the shed-roofed studio and the gable house are fitted at the wrong depth (IoU-64
+/// 0.62–0.78) by runs that agree on it.)
 #[test]
 fn a_house_whose_shape_the_photo_does_not_fix_is_flagged() {
-    let s = check_seeded("gable-dormers", Input::Textured, 0.8, 1);
+    let case = cases()
+        .unwrap()
+        .into_iter()
+        .find(|c| c.name == "hip-bungalow")
+        .unwrap();
+    let view = case_view(&case.mesh, 90f64.to_radians(), 2f64.to_radians()).unwrap();
+    let s = fit_and_score_input(&case.mesh, &view, Input::Mask, settings(true)).unwrap();
+    eprintln!("hip-bungalow from its end: {s:?}");
     let w = agreement_warning(s.agreement);
     assert!(w.is_some(), "agreement {:?}", s.agreement);
     assert!(w.unwrap().contains("add a photo from another side"));
@@ -211,7 +221,7 @@ fn mask_iou(a: &procfit::mask::Mask, b: &procfit::mask::Mask) -> f64 {
 /// A building's photo is cut for a building (`Capabilities::outline_smoothing`): the L with
 /// flat roofs on textured ground, whose shaded wall's foot is close in colour to the ground, lost
 /// a wedge of it to the cut's smoothness as the default cuts it (405 pixels, mask IoU 0.974
-/// measured) and keeps it cut as a building's (0.991).
+/// measured) and keeps it cut as a building's (46 pixels, 0.994).
 #[test]
 fn a_building_photo_is_cut_into_its_corners() {
     let case = cases()
@@ -247,13 +257,13 @@ fn a_building_photo_is_cut_into_its_corners() {
 /// Issue 15, the mask's confidence means something: every photo of the benchmark (ten
 /// buildings on plain, gradient and textured ground) is segmented as the CLI does for a
 /// building, and the automatic masks must be right (IoU ≥ 0.96 against the true silhouette,
-/// mean ≥ 0.985) and mostly not flagged for the user to check. Measured: mean IoU 0.992,
-/// lowest 0.981 (the five-storey block on the gradient; 0.991 and 0.974 as a dish's photo is
-/// cut, 0.958 before the segmentation's last cut near the outline kept the wall below its
-/// lowest windows), 25 of 30 not flagged (26 as a dish's photo is cut: the finer cut follows
-/// the grass's grain a little, and one more outline on textured ground falls under the edge
-/// check's level; 14 before the mask check measured the outline's edges against the
-/// surroundings' alone and the frame check followed a horizon).
+/// mean ≥ 0.985) and mostly not flagged for the user to check. Measured: mean IoU 0.993,
+/// lowest 0.985 (the hip-roofed bungalow on plain ground; as a dish's photo is cut 0.991 and
+/// 0.974, the five-storey block on the gradient, 0.958 before the segmentation's last cut near
+/// the outline kept the wall below its lowest windows), 25 of 30 not flagged (26 as a dish's
+/// photo is cut: the finer cut follows the grass's grain a little, and one more outline on
+/// textured ground falls under the edge check's level; 14 before the mask check measured the
+/// outline's edges against the surroundings' alone and the frame check followed a horizon).
 #[test]
 fn photo_masks_are_right_and_not_doubted() {
     let (mut sum, mut n, mut trusted) = (0.0, 0usize, 0usize);

@@ -384,7 +384,7 @@ fn a_tree_gets_its_label_image() {
 /// `segment --generator building` cuts the photo as `reconstruct --generator building` does, a
 /// building's way (closer into corners) and not the default way: the L with flat roofs on
 /// textured ground (the building benchmark's) keeps its shaded wall's foot (405 pixels of the
-/// true silhouette the default cut leaves out, 84 as a building's, measured).
+/// true silhouette the default cut leaves out, 46 as a building's, measured).
 #[test]
 fn a_building_photo_is_written_as_a_building_is_cut() {
     let case = procfit::building_bench::cases()

@@ -15,9 +15,12 @@ const fitter = new FitRunner({
 });
 window.procfit.fitter = fitter;
 
-/** Fit and Refit are enabled when every photo has its mask and the generator can be fitted. */
+/**
+ * Fit and Refit are enabled when every photo has its mask (not being cut again for another
+ * kind of object) and the generator can be fitted.
+ */
 export function updateFitButton() {
-  const ready = state.photos.length > 0 && state.photos.every((p) => p.mask);
+  const ready = state.photos.length > 0 && state.photos.every((p) => p.mask && p.maskState !== 'working');
   const button = $('fit-start');
   button.disabled = !ready || !!fitter.running || !state.editor;
   button.title = ready ? '' : 'Add a photo and wait for its mask first';

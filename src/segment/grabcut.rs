@@ -403,7 +403,8 @@ impl Session {
     /// (gradient 0.924 / 0.926 / 0.914, textured 0.901 / 0.923 / 0.922) and the dishes lose
     /// (0.908 / 0.906 / 0.914: the vase's mask 0.975 → 0.966); at 0.4 the buildings score as
     /// here and the dishes as at 0.3 (0.910 / 0.910 / 0.907). So the weight is the object
-    /// kind's ([`Options::outline_smoothing`]): 0.3 for a building, 0.5 for the rest.
+    /// kind's ([`Options::outline_smoothing`]): 0.1 for a building (measured against 0.3 and
+    /// 0.2 in the building generator's capabilities), 0.5 for the rest.
     ///
     /// Tried for one weight for all and not kept: a second pass over a band around the new
     /// outline, or a wider band (12 pixels), changed no building photo's mask (the band is not
