@@ -391,6 +391,14 @@ fn wing(rect: Rect, floors: u32, floor_height: f32, roof: Roof, overhang: f32) -
     }
 }
 
+/// The benchmark's building called `name` (one of [`cases`]).
+pub fn case_named(name: &str) -> Result<BenchBuilding, FitError> {
+    cases()?
+        .into_iter()
+        .find(|c| c.name == name)
+        .ok_or_else(|| FitError(format!("no benchmark building is called {name}")))
+}
+
 /// The benchmark's buildings, in a fixed order, with their cameras (elevations 5°–30°).
 pub fn cases() -> Result<Vec<BenchBuilding>, FitError> {
     let deg = |d: f64| d.to_radians();

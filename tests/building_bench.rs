@@ -12,8 +12,8 @@
 
 use procfit::bench_cases::BenchFit;
 use procfit::building_bench::{
-    BenchScore, Input, PAPER_CAMERAS, case_view, cases, fit_and_score, fit_and_score_input,
-    input_mask, paper_building,
+    BenchBuilding, BenchScore, Input, PAPER_CAMERAS, case_named, case_view, cases, fit_and_score,
+    fit_and_score_input, input_mask, paper_building,
 };
 use procfit::generators::building::Building;
 use procfit::reconstruct::eval::{agreement_warning, photo_match_level, photo_match_warning};
@@ -36,17 +36,25 @@ fn settings(each: bool) -> BenchFit {
     }
 }
 
+/// The photo of `case` on `input`'s ground as the segmentation reads it.
+fn photo_of(case: &BenchBuilding, input: Input) -> procfit::segment::Photo {
+    let px = procfit::building_bench::photo(&case.mesh, &case.view, input).unwrap();
+    procfit::segment::Photo::from_rgba(
+        case.view.width,
+        case.view.height,
+        &px,
+        procfit::segment::WORKING_SIDE,
+    )
+    .unwrap()
+}
+
 fn check(name: &str, input: Input, min: f64) -> BenchScore {
     check_seeded(name, input, min, settings(true).seed)
 }
 
 /// [`check`] with the fit's seed `seed`.
 fn check_seeded(name: &str, input: Input, min: f64, seed: u64) -> BenchScore {
-    let case = cases()
-        .unwrap()
-        .into_iter()
-        .find(|c| c.name == name)
-        .unwrap();
+    let case = case_named(name).unwrap();
     // Every run scored too (the bench's `--each`): one of them is the fit.
     let fit = BenchFit {
         seed,
@@ -123,11 +131,7 @@ fn a_box_that_does_not_outline_its_photo_is_refitted_from_l_seeds() {
 /// 0.62–0.78) by runs that agree on it.)
 #[test]
 fn a_house_whose_shape_the_photo_does_not_fix_is_flagged() {
-    let case = cases()
-        .unwrap()
-        .into_iter()
-        .find(|c| c.name == "hip-bungalow")
-        .unwrap();
+    let case = case_named("hip-bungalow").unwrap();
     let view = case_view(&case.mesh, 90f64.to_radians(), 2f64.to_radians()).unwrap();
     let s = fit_and_score_input(&case.mesh, &view, Input::Mask, settings(true)).unwrap();
     eprintln!("hip-bungalow from its end: {s:?}");
@@ -224,20 +228,9 @@ fn mask_iou(a: &procfit::mask::Mask, b: &procfit::mask::Mask) -> f64 {
 /// measured) and keeps it cut as a building's (46 pixels, 0.994).
 #[test]
 fn a_building_photo_is_cut_into_its_corners() {
-    let case = cases()
-        .unwrap()
-        .into_iter()
-        .find(|c| c.name == "l-flat")
-        .unwrap();
+    let case = case_named("l-flat").unwrap();
     let truth = input_mask(&case.mesh, &case.view, Input::Mask).unwrap();
-    let px = procfit::building_bench::photo(&case.mesh, &case.view, Input::Textured).unwrap();
-    let p = procfit::segment::Photo::from_rgba(
-        case.view.width,
-        case.view.height,
-        &px,
-        procfit::segment::WORKING_SIDE,
-    )
-    .unwrap();
+    let p = photo_of(&case, Input::Textured);
     let iou = |opts: &procfit::segment::Options| {
         mask_iou(
             &procfit::segment::segment_auto_with(&p, opts)
@@ -271,14 +264,7 @@ fn photo_masks_are_right_and_not_doubted() {
     for case in cases().unwrap() {
         let truth = input_mask(&case.mesh, &case.view, Input::Mask).unwrap();
         for input in [Input::Plain, Input::Gradient, Input::Textured] {
-            let px = procfit::building_bench::photo(&case.mesh, &case.view, input).unwrap();
-            let p = procfit::segment::Photo::from_rgba(
-                case.view.width,
-                case.view.height,
-                &px,
-                procfit::segment::WORKING_SIDE,
-            )
-            .unwrap();
+            let p = photo_of(&case, input);
             let opts = procfit::segment::Options::for_generator(Some(&Building));
             let seg = procfit::segment::segment_auto_with(&p, &opts).unwrap();
             let iou = mask_iou(&seg.object, &truth);

@@ -492,11 +492,7 @@ fn a_building_fit_that_cannot_match_tries_other_shapes_and_says_so() {
 /// shape or one like it; see tests/building_bench.rs.)
 #[test]
 fn a_fit_the_photo_does_not_fix_says_so() {
-    let case = procfit::building_bench::cases()
-        .unwrap()
-        .into_iter()
-        .find(|c| c.name == "hip-bungalow")
-        .unwrap();
+    let case = procfit::building_bench::case_named("hip-bungalow").unwrap();
     let view =
         procfit::building_bench::case_view(&case.mesh, 90f64.to_radians(), 2f64.to_radians())
             .unwrap();

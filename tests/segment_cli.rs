@@ -387,11 +387,7 @@ fn a_tree_gets_its_label_image() {
 /// true silhouette the default cut leaves out, 46 as a building's, measured).
 #[test]
 fn a_building_photo_is_written_as_a_building_is_cut() {
-    let case = procfit::building_bench::cases()
-        .unwrap()
-        .into_iter()
-        .find(|c| c.name == "l-flat")
-        .unwrap();
+    let case = procfit::building_bench::case_named("l-flat").unwrap();
     let input = procfit::building_bench::Input::Textured;
     let px = procfit::building_bench::photo(&case.mesh, &case.view, input).unwrap();
     let photo = scratch("l-flat-textured.png");
