@@ -384,12 +384,12 @@ impl Session {
     }
 
     /// One more cut near the outline (within [`OUTLINE_BAND`]) with the smoothness term at
-    /// [`Options::outline_smoothing`] of its weight ([`OUTLINE_SMOOTHING`] by default). At full weight the cut takes a short path along a
-    /// strong edge inside the object when a thin strip of it is close in colour to what lies
-    /// beyond: a building's wall below its lowest windows or beside its last column of them,
-    /// in shade, against grass, was cut off along the windows' edges. The first cuts, at full
-    /// weight, still decide what the object is (a spoon beside a saucer stays out: a band
-    /// cannot reach it).
+    /// [`Options::outline_smoothing`] of its weight ([`OUTLINE_SMOOTHING`] by default). At full
+    /// weight the cut takes a short path along a strong edge inside the object when a thin
+    /// strip of it is close in colour to what lies beyond: a building's wall below its lowest
+    /// windows or beside its last column of them, in shade, against grass, was cut off along
+    /// the windows' edges. The first cuts, at full weight, still decide what the object is (a
+    /// spoon beside a saucer stays out: a band cannot reach it).
     ///
     /// On the independent building benchmark's photos the automatic masks' mean IoU went
     /// 0.988 → 0.991 (the five-storey block on the gradient 0.958 → 0.974), and the fits'
