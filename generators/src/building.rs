@@ -1668,6 +1668,8 @@ impl Generator for Building {
             // Mitsuba dish photos fell 0.931 / 0.933 / 0.932 -> 0.905 / 0.903 / 0.915 (seeds 0 /
             // 1 / 2).
             outline_smoothing: 0.1,
+            // A box, an L or a tower can be any depth behind its front.
+            free_depth: true,
         }
     }
 

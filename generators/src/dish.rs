@@ -1099,6 +1099,8 @@ impl Generator for Dish {
             // A smoother cut is no better: at 0.7 the masks are as at 0.5 (0.978) and the fits
             // 0.898 / 0.925 / 0.908 (how much a fit moves when its mask moves by a few pixels).
             outline_smoothing: 0.5,
+            // A lathed body is as deep as it is wide (the handle's turn is the agreement's).
+            free_depth: false,
         }
     }
 

@@ -383,6 +383,11 @@ pub struct Capabilities {
     /// colours carry the outline into a corner where a shaded wall meets ground of a similar
     /// colour, higher keeps a rounded outline from taking in reflections and table grain.
     pub outline_smoothing: f32,
+    /// Whether its shapes can reach further back or less far at the same front outline (a
+    /// box's depth; a lathed dish's depth is its width): then a photo that shows no depth (a
+    /// façade straight on, at eye level) leaves the depth a guess, and a fit checks for that
+    /// (procfit's `eval::depth_agreement`).
+    pub free_depth: bool,
 }
 
 /// The reverse-mode derivative of one generated mesh: maps dL/d(positions) to dL/d(params).

@@ -1262,6 +1262,9 @@ impl Generator for TreeGenerator {
             // The segmentation's default: a tree is fitted to its colour labels; the cut only
             // bounds them.
             outline_smoothing: 0.5,
+            // A tree's depth is a guess from one photo whatever it shows; its fit says what it
+            // matched (the labels' IoU), not how deep the crown is.
+            free_depth: false,
         }
     }
     fn generate(&self, params: &[f64], lod: Lod) -> Result<Mesh, GenError> {

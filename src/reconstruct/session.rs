@@ -421,11 +421,13 @@ impl Session {
             .collect()
     }
 
-    /// How well the photos fix the shape once every run is done ([`eval::agreement`] of the
-    /// kept run against the others; `None` before, with one run, or when no other run matched
-    /// the photos about as well).
+    /// How well the photos fix the shape once every run is done: the lower of
+    /// [`eval::agreement`] (the kept run against the others) and [`eval::depth_agreement`] (the
+    /// kept model against copies of it reaching less far or further back that match the photos
+    /// as well); `None` before, or when neither finds an alternative.
     ///
     /// [`eval::agreement`]: super::eval::agreement
+    /// [`eval::depth_agreement`]: super::eval::depth_agreement
     pub fn agreement(&self) -> Result<Option<f64>, FitError> {
         if !self.is_done() {
             return Ok(None);
@@ -433,7 +435,12 @@ impl Session {
         let Some((kept, _)) = self.best_finished() else {
             return Ok(None);
         };
-        super::eval::agreement(kept, self.run_results().into_iter().flatten())
+        let runs = super::eval::agreement(kept, self.run_results().into_iter().flatten())?;
+        let depth = super::eval::depth_agreement(kept, &self.masks)?;
+        Ok(match (runs, depth) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        })
     }
 
     /// The best finished run's result and last progress.

@@ -75,6 +75,7 @@ impl Generator for Prism {
             fit_runs: 1,
             photo_match_level: 0.85,
             outline_smoothing: 0.5,
+            free_depth: false,
         }
     }
     fn generate(&self, params: &[f64], lod: Lod) -> Result<Mesh, GenError> {
