@@ -7,8 +7,9 @@
 //! `-- --each` prints a line per camera (its yaw and elevation, the IoU-64, the photo-view IoU
 //! against the mask as the CLI prints it, and the fitted parameters) and per run (loss, tie
 //! prior, fitted yaw and elevation, IoU-64, IoU-64 against the kept run, the parameters: enough
-//! to re-apply another choice among the runs to the same runs without fitting again); `-- --fill-holes` fills the masks' holes (a mug handle's)
-//! before fitting, to measure what the hole tells the fit.
+//! to re-apply another choice among the runs to the same runs without fitting again);
+//! `-- --fill-holes` fills the masks' holes (a mug handle's) before fitting, to measure what
+//! the hole tells the fit.
 #![allow(
     clippy::unwrap_used,
     clippy::expect_used,

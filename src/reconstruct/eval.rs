@@ -261,8 +261,8 @@ pub const DEPTH_SLACK: f64 = 0.005;
 /// ([`Capabilities::free_depth`](crate::generators::Capabilities::free_depth)): the kept
 /// model is stretched along the first photo's line of sight (made level, towards the model's
 /// centre), its front kept in place, by each of [`DEPTH_STRETCHES`], and each stretched copy
-/// that matches every photo
-/// about as well ([`DEPTH_SLACK`]) is an alternative the photos cannot rule out; the lowest
+/// that matches every photo about as well ([`DEPTH_SLACK`]) is an alternative the photos
+/// cannot rule out; the lowest
 /// IoU-64 (128², as [`agreement`]) between the kept model and such a copy, or `None` when
 /// the photos rule them all out (a roof or a side wall in view), the generator's depth is not
 /// free, or the camera looks straight down. The runs of a fit often agree on one depth (the
@@ -279,9 +279,10 @@ pub fn depth_agreement(kept: &FitResult, masks: &[Mask]) -> Result<Option<f64>, 
         .generator
         .generate(&model.params, model.lod)
         .map_err(|e| FitError(e.to_string()))?;
-    let Some(centre) = bbox_centre(&mesh.positions) else {
+    let Some((lo, hi)) = mesh.bounds() else {
         return Ok(None);
     };
+    let centre = 0.5 * (lo + hi);
     // The line of sight to the model's centre, in the model's frame, made level.
     let rotation = view.params.rotation_and_derivatives()[0];
     let world = view.params.translation + view.params.scale * (rotation * centre.as_dvec3());
@@ -321,15 +322,6 @@ pub fn depth_agreement(kept: &FitResult, masks: &[Mask]) -> Result<Option<f64>, 
         }
     }
     Ok(lowest)
-}
-
-/// The centre of the bounding box of `positions` (`None` when empty).
-fn bbox_centre(positions: &[Vec3]) -> Option<Vec3> {
-    let first = *positions.first()?;
-    let (lo, hi) = positions
-        .iter()
-        .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
-    Some(0.5 * (lo + hi))
 }
 
 /// The one-line verdict on an [`agreement`]: `None` at [`AGREEMENT_LEVEL`] or better (or
