@@ -21,7 +21,8 @@
 //! photo-view IoU against its mask below the building's `photo_match_level` (the CLI's "does
 //! not match" warning) and for either.
 //! `-- --save DIR` also writes each case's photos and masks there as PNG; `-- --each` prints
-//! every run of each fit (loss, tie prior, IoU-64, main shape parameters) after its row;
+//! every run of each fit (loss, tie prior, IoU-64, photo-view IoU against its mask, main shape
+//! parameters) after its row;
 //! `-- --windows` fits each photo with the window labels found in it, as the page's "Find
 //! windows" gives them (the fit's window term and layout search: about 40× the time).
 
@@ -253,12 +254,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 fn print_runs(s: &BenchScore) {
     for (k, r) in s.runs.iter().enumerate() {
         eprintln!(
-            "    run {k}{}: loss {:.5}, tie prior {:.3}, IoU-64 {:.3}, against the kept run {:.3}, {}",
+            "    run {k}{}: loss {:.5}, tie prior {:.3}, IoU-64 {:.3}, against the kept run {:.3}, photo-view IoU {:.4}, {}",
             if r.kept { " (kept)" } else { "" },
             r.loss,
             r.tie_prior,
             r.iou64,
             r.agreement,
+            r.photo_iou,
             r.shape
         );
     }

@@ -3,10 +3,12 @@
 //! building (a non-preset one), each from one 512² mask, on 1 and 2 threads. Prints a markdown
 //! table of medians over several random cameras. Run with `cargo bench --bench reconstruct`;
 //! `-- WORD …` runs only the objects whose name contains one of the words (`-- building`);
-//! `-- --threads N` runs one thread count only; `-- --cameras N` fits N cameras (4);
+//! `-- --threads N` runs one thread count only; `-- --cameras N` fits N cameras (4); `-- --runs
+//! N` makes N runs a fit (the page's and the CLI's number by default);
 //! `-- --each` prints a line per camera (its yaw and elevation, the IoU-64, the photo-view IoU
 //! against the mask as the CLI prints it, and the fitted parameters) and per run (loss, tie
-//! prior, fitted yaw and elevation, IoU-64, IoU-64 against the kept run, the parameters: enough
+//! prior, fitted yaw and elevation, IoU-64, IoU-64 against the kept run, photo-view IoU, the IoU
+//! of its holes with the mask's, the parameters: enough
 //! to re-apply another choice among the runs to the same runs without fitting again);
 //! `-- --fill-holes` fills the masks' holes (a mug handle's) before fitting, to measure what
 //! the hole tells the fit.
@@ -60,12 +62,13 @@ fn main() {
     };
     let only_threads = number("--threads");
     let cameras = number("--cameras").unwrap_or(CAMERAS);
+    let runs = number("--runs");
     let words: Vec<String> = args
         .iter()
         .enumerate()
         .filter(|&(i, a)| {
             !a.starts_with('-')
-                && (i == 0 || !matches!(args[i - 1].as_str(), "--threads" | "--cameras"))
+                && (i == 0 || !matches!(args[i - 1].as_str(), "--threads" | "--cameras" | "--runs"))
         })
         .map(|(_, a)| a.clone())
         .collect();
@@ -108,8 +111,9 @@ fn main() {
                             generator: g.to_string(),
                             fov_y: vec![Some(0.5)],
                             quality,
-                            // The page's and the CLI's number of runs for this generator.
-                            restarts: FitConfig::restarts_for(g, quality),
+                            // The page's and the CLI's number of runs for this generator
+                            // unless `--runs` says otherwise.
+                            restarts: runs.unwrap_or(FitConfig::restarts_for(g, quality)),
                             ..FitConfig::default()
                         },
                         vec![mask.clone()],
@@ -123,8 +127,9 @@ fn main() {
                         );
                         for (k, run) in session.run_results().into_iter().enumerate() {
                             let Some(run) = run else { continue };
+                            let (photo, holes) = run_photo_and_holes(run, mask);
                             eprintln!(
-                                "    run {k}: loss {:.6e}, tie prior {:.3}, fitted yaw {:.0}°, elevation {:.1}°, IoU-64 {:.3}, against the kept run {:.3}, params {:?}",
+                                "    run {k}: loss {:.6e}, tie prior {:.3}, fitted yaw {:.0}°, elevation {:.1}°, IoU-64 {:.3}, against the kept run {:.3}, photo-view IoU {photo:.4}, holes' IoU {holes:.3}, params {:?}",
                                 run.loss,
                                 run.model.generator.tie_prior(&run.model.params),
                                 run.views[0].params.yaw.to_degrees(),
@@ -178,6 +183,47 @@ fn main() {
             );
         }
     }
+}
+
+/// A run's photo-view IoU against `mask` and the IoU of its silhouette's holes (background
+/// not connected to the border, a handle's) with the mask's: 1 when neither has a hole.
+fn run_photo_and_holes(
+    run: &procfit::reconstruct::FitResult,
+    mask: &procfit::mask::Mask,
+) -> (f64, f64) {
+    let model = &run.model;
+    let mesh = model.generator.generate(&model.params, model.lod).unwrap();
+    let coverage = procfit::reconstruct::render_coverage(&mesh, &run.views[0]).unwrap();
+    let (w, h) = (mask.width() as usize, mask.height() as usize);
+    let holes_of = |object: Vec<bool>| {
+        let mut out = vec![false; w * h];
+        for hole in procfit::segment::morph::holes(&object, w, h) {
+            for i in hole {
+                out[i] = true;
+            }
+        }
+        out
+    };
+    let fitted = holes_of(coverage.iter().map(|&c| c > 0.5).collect());
+    let truth = holes_of(mask.values().iter().map(|&v| v > 0.5).collect());
+    let both = fitted
+        .iter()
+        .zip(&truth)
+        .filter(|(a, b)| **a && **b)
+        .count();
+    let either = fitted
+        .iter()
+        .zip(&truth)
+        .filter(|(a, b)| **a || **b)
+        .count();
+    let photo =
+        procfit::reconstruct::eval::result_photo_ious(run, std::slice::from_ref(mask)).unwrap()[0];
+    let holes = if either == 0 {
+        1.0
+    } else {
+        both as f64 / either as f64
+    };
+    (photo, holes)
 }
 
 /// `mask` with every hole (background not connected to the border) made object.

@@ -778,6 +778,9 @@ pub struct RunScore {
     /// Its IoU-64 against the kept run's model, both in the kept run's frame
     /// ([`eval::fit_agreement`]): how different a shape it is.
     pub agreement: f64,
+    /// Its photo-view IoU against the mask the fit was given, as
+    /// [`BenchScore::mask_photo_iou`].
+    pub photo_iou: f64,
     /// Whether the fit kept this run.
     pub kept: bool,
     /// Its main shape parameters, `name=value` separated by spaces.
@@ -890,11 +893,25 @@ fn fit_scored(
             .map(|(n, i)| format!("{n}={:.2}", p[*i]))
             .collect::<Vec<_>>()
             .join(" ");
+            // The model's bounding box, width × depth × height over its height.
+            let built = run
+                .model
+                .generator
+                .generate(p, run.model.lod)
+                .map_err(|e| FitError(e.to_string()))?;
+            let shape = match built.bounds() {
+                Some((lo, hi)) => {
+                    let d = hi - lo;
+                    format!("box={:.2}x{:.2}x1 {shape}", d.x / d.y, d.z / d.y)
+                }
+                None => shape,
+            };
             runs.push(RunScore {
                 loss: run.loss,
                 tie_prior: run.model.generator.tie_prior(p),
                 iou64: fit_iou64(run, truth, view)?.0,
                 agreement: eval::fit_agreement(&result, run, 128)?,
+                photo_iou: eval::result_photo_ious(run, std::slice::from_ref(&for_colours))?[0],
                 kept: run.loss == result.loss && *p == result.model.params,
                 shape,
             });
