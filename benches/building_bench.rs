@@ -24,7 +24,8 @@
 //! every run of each fit (loss, tie prior, IoU-64, photo-view IoU against its mask, main shape
 //! parameters) after its row;
 //! `-- --windows` fits each photo with the window labels found in it, as the page's "Find
-//! windows" gives them (the fit's window term and layout search: about 40× the time).
+//! windows" gives them (the fit's window term and layout search in half the runs: about 20×
+//! the time); a row says when the fit left them out (`Session::windows_left_out`).
 
 use procfit::bench_cases::BenchFit;
 use procfit::building_bench::{
@@ -127,8 +128,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     let colours = s
                         .colour_de
                         .map_or(String::new(), |(w, r)| format!("{} / {}", de(w), de(r)));
+                    // With window labels: whether the fit kept a run of the outline alone.
+                    let left_out = match s.windows_left_out {
+                        true => " (windows left out)",
+                        false => "",
+                    };
                     println!(
-                        "| {name} | {kind} | {} | {:.3} | {:.3} | {:.3} | {secs:.1} | {colours} | {} |",
+                        "| {name} | {kind} | {}{left_out} | {:.3} | {:.3} | {:.3} | {secs:.1} | {colours} | {} |",
                         input.name(),
                         s.iou64,
                         s.photo_iou,

@@ -805,6 +805,8 @@ pub struct BenchScore {
     pub agreement: Option<f64>,
     /// Every run of the fit, when asked for ([`BenchFit::each`]); empty otherwise.
     pub runs: Vec<RunScore>,
+    /// With window labels: whether the fit left them out ([`Session::windows_left_out`]).
+    pub windows_left_out: bool,
 }
 
 /// Fits `mask` as the CLI does with the building generator (the field of view known) with the
@@ -949,6 +951,7 @@ fn fit_scored(
         colour_de,
         agreement,
         runs,
+        windows_left_out: session.windows_left_out().is_some(),
     })
 }
 

@@ -475,6 +475,9 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
     report_rescue(&session, &result);
     report_photo_match(&result, &masks, &a.images)?;
     report_agreement(agreement);
+    if let Some(note) = eval::windows_left_out_note(session.windows_left_out()) {
+        println!("{note}");
+    }
     Ok(())
 }
 

@@ -172,6 +172,25 @@ fn shed_roof_on_textured_ground() {
     assert!(roof.is_some_and(|d| d <= 6.0), "roof colour ΔE {roof:?}");
 }
 
+/// "Find windows" on the shed-roofed studio's photo on textured ground: the runs fitted to the
+/// windows found in it (half of them) match the outline less well than the others, so the fit
+/// leaves the windows out, says so, and is as good as without them. Measured at seeds 0 and 1:
+/// 0.980 and 0.990, left out (0.991 without windows at seed 1); 0.743 at seed 1 when every
+/// run fitted the windows and one of them was kept.
+#[test]
+fn windows_that_cost_the_outline_are_left_out() {
+    let case = case_named("shed-studio").unwrap();
+    let fit = BenchFit {
+        windows: true,
+        ..settings(false)
+    };
+    let s = fit_and_score_input(&case.mesh, &case.view, Input::Textured, fit).unwrap();
+    eprintln!("{s:?}");
+    assert!(s.windows_left_out, "the windows were kept");
+    assert!(s.iou64 >= 0.95, "IoU-64 {:.3}", s.iou64);
+    assert_eq!(match_warning(&s), None);
+}
+
 /// Measured 0.925 (0.636 before: the fit took the plain photo's house for an L whose wing hid
 /// behind the main block; Occam's step now tries the rectangle). The segmented mask itself is
 /// the true one within a pixel or two of the outline.

@@ -145,6 +145,7 @@ impl Default for FitConfig {
 }
 
 /// A checked fit: what every run of it starts from.
+#[derive(Clone)]
 pub(super) struct Plan {
     /// The window term, shared by every stage's objective.
     pub windows: Option<Arc<WindowTerm>>,

@@ -338,6 +338,16 @@ pub fn agreement_warning(agreement: Option<f64>) -> Option<String> {
     })
 }
 
+/// The one-line note on [`Session::windows_left_out`](super::Session::windows_left_out):
+/// `None` when the window labels were used (or there were none), else that they were not and
+/// what to try.
+pub fn windows_left_out_note(left_out: Option<(f64, f64)>) -> Option<String> {
+    let (with, without) = left_out?;
+    Some(format!(
+        "the windows found were left out: the model fitted to them matched the outline less          well (IoU {with:.3} against {without:.3} without them), so the floors and window          columns are the outline's guess: check the windows (each should cover a window of the          building and nothing else), or add a photo"
+    ))
+}
+
 /// The one-line verdict on a fitted tree's photo-view IoU (the tree pixels' silhouette IoU
 /// through the photo's camera): `None` at `level` (the tree generator's
 /// [`photo_match_level`]) or better, else what to try; `labels_hint` says how the labels are

@@ -37,7 +37,7 @@ pub use config::{
 pub use eval::{align_to_reference, iou64, normalized};
 pub use objective::{FitObjective, Layout, render_coverage, resample_mask};
 pub use rim::{DEFAULT_RIM_WEIGHT, Luma, RimTerm};
-pub use session::{FitResult, PREVIEW_SIDE, Progress, Session};
+pub use session::{FitResult, PREVIEW_SIDE, Progress, Session, WINDOW_OUTLINE_SLACK};
 pub use views::{CAMERA_DISTANCE, DEFAULT_FOV_Y, ViewSlot, ViewVars, fov_from_focal_35mm};
 pub use windows::{DEFAULT_WINDOW_WEIGHT, WindowTerm};
 

@@ -65,6 +65,8 @@ struct ResultOut {
     agreement: Option<f64>,
     /// What it means and what to try when it is below `eval::AGREEMENT_LEVEL`.
     agreement_warning: Option<String>,
+    /// That the window labels given were left out, and why (`eval::windows_left_out_note`).
+    windows_note: Option<String>,
 }
 
 /// Masks from 8-bit codes (object 255, background 0, don't care 128, anything else a soft
@@ -334,6 +336,7 @@ impl FitSession {
         let out = ResultOut {
             agreement,
             agreement_warning: eval::agreement_warning(agreement),
+            windows_note: eval::windows_left_out_note(self.session.windows_left_out()),
             match_warning: eval::photo_match_warning(&photo_ious, &[], match_level),
             match_level,
             photo_ious,

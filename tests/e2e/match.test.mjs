@@ -143,3 +143,29 @@ test('a fit the photo does not fix says so under the match, with what to do', as
   assert.equal(shown.fixed.agreement, '');
   assert.equal(shown.fixed.kind, 'info');
 });
+
+test('windows the fit left out are said under the match, with what to do', async () => {
+  // The core's note (`FitSession::result`'s `windows_note`, tested natively in
+  // tests/reconstruct_windows.rs): a building fit with "Find windows" keeps a run of the
+  // outline alone when the runs fitted to the windows match the outline less well.
+  const shown = await page.evaluate(async () => {
+    const { showMatch } = await import('./www/fit-step.js');
+    const m = document.getElementById('fit-match');
+    const read = () => ({ text: m.hidden ? '' : m.textContent, windows: m.dataset.windows, kind: m.dataset.kind });
+    const note = 'the windows found were left out: the model fitted to them matched the outline less well (IoU 0.977 against 0.989 without them), so the floors and window columns are the outline\'s guess: check the windows (each should cover a window of the building and nothing else), or add a photo';
+    showMatch({ photo_ious: [0.989], match_level: 0.97, match_warning: null, windows_note: note });
+    const leftOut = read();
+    showMatch({ photo_ious: [0.989], match_level: 0.97, match_warning: null, windows_note: null });
+    const used = read();
+    showMatch({});
+    return { leftOut, used };
+  });
+  assert.match(shown.leftOut.text, /That is a match/);
+  assert.match(shown.leftOut.text, /The windows found were left out/);
+  assert.match(shown.leftOut.text, /check the windows/);
+  assert.equal(shown.leftOut.windows, 'left-out');
+  assert.equal(shown.leftOut.kind, 'warn');
+  assert.doesNotMatch(shown.used.text, /left out/);
+  assert.equal(shown.used.windows, '');
+  assert.equal(shown.used.kind, 'info');
+});
