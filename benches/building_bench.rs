@@ -141,6 +141,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         s.mask_photo_iou,
                         agreement_cell(s.agreement)
                     );
+                    if let Some([(a, x), (b, y)]) = s.window_candidates {
+                        eprintln!(
+                            "    windows: the best run fitting them outline {a:.4}, IoU-64 {x:.3}; of the outline alone {b:.4}, {y:.3}"
+                        );
+                    }
                     print_runs(&s);
                     warned.push(warned_of(&s, level));
                     let row = (s.iou64, s.photo_iou, secs);
@@ -204,6 +209,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                                 t.elapsed().as_secs_f64(),
                                 agreement_cell(s.agreement)
                             );
+                            if let Some([(a, x), (b, y)]) = s.window_candidates {
+                                eprintln!(
+                                    "    windows: the best run fitting them outline {a:.4}, IoU-64 {x:.3}; of the outline alone {b:.4}, {y:.3}"
+                                );
+                            }
                             print_runs(&s);
                             warned.push(warned_of(&s, level));
                         }

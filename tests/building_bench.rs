@@ -173,10 +173,10 @@ fn shed_roof_on_textured_ground() {
 }
 
 /// "Find windows" on the shed-roofed studio's photo on textured ground: the runs fitted to the
-/// windows found in it (half of them) match the outline less well than the others, so the fit
-/// leaves the windows out, says so, and is as good as without them. Measured at seeds 0 and 1:
-/// 0.980 and 0.990, left out (0.991 without windows at seed 1); 0.743 at seed 1 when every
-/// run fitted the windows and one of them was kept.
+/// windows found in it (three added to the six) match the outline less well than the others,
+/// so the fit leaves the windows out, says so, and is the fit without them. Measured at seeds
+/// 0 and 1 (with half of the six fitting the windows): 0.980 and 0.990, left out (0.991
+/// without windows at seed 1); 0.743 at seed 1 when every run fitted the windows.
 #[test]
 fn windows_that_cost_the_outline_are_left_out() {
     let case = case_named("shed-studio").unwrap();
