@@ -151,8 +151,6 @@ pub struct Session {
     /// Per finished run of a fit with window labels: its photo-view IoU, the mean over the
     /// photos.
     outline: Vec<Option<f64>>,
-    /// See [`Session::windows_left_out`].
-    windows_left_out: Option<(f64, f64)>,
     /// See [`Session::window_candidates`].
     window_candidates: Option<[(usize, f64); 2]>,
 }
@@ -330,7 +328,6 @@ impl Session {
             rescued_from: Vec::new(),
             best: None,
             windowed,
-            windows_left_out: None,
             window_candidates: None,
         })
     }
@@ -414,30 +411,24 @@ impl Session {
         self.progress()
     }
 
-    /// Sets the kept run ([`Session::best`]): [`pick`]'s, or with window labels the best run
-    /// fitted to them too unless it matches the outline less well than the best run fitted to
-    /// the outline alone by more than [`WINDOW_OUTLINE_SLACK`] (then that one, and
-    /// [`Session::windows_left_out`] says so).
+    /// Sets the kept run (`best`): [`pick`]'s, or with window labels the best run fitted to
+    /// them too unless it matches the outline less well than the best run fitted to the outline
+    /// alone by more than [`WINDOW_OUTLINE_SLACK`] (then that one:
+    /// [`Session::windows_left_out`]).
     fn choose(&mut self) {
         let windowed = &self.windowed;
-        self.windows_left_out = None;
+        self.window_candidates = None;
         if windowed.iter().all(|&w| w) || !windowed.iter().any(|&w| w) {
             self.best = pick(&self.finished, |_| true);
             return;
         }
         let framed = pick(&self.finished, |k| windowed[k]);
         let plain = pick(&self.finished, |k| !windowed[k]);
-        self.window_candidates = None;
         self.best = match (framed, plain) {
             (Some(f), Some(p)) => match (self.outline[f], self.outline[p]) {
                 (Some(a), Some(b)) => {
                     self.window_candidates = Some([(f, a), (p, b)]);
-                    if a < b - WINDOW_OUTLINE_SLACK {
-                        self.windows_left_out = Some((a, b));
-                        Some(p)
-                    } else {
-                        Some(f)
-                    }
+                    Some(if a < b - WINDOW_OUTLINE_SLACK { p } else { f })
                 }
                 _ => Some(f),
             },
@@ -457,7 +448,8 @@ impl Session {
     /// ([`WINDOW_OUTLINE_SLACK`]): that run's photo-view IoU and the kept one's, the means over
     /// the photos. `None` otherwise, and before the fit is done.
     pub fn windows_left_out(&self) -> Option<(f64, f64)> {
-        self.is_done().then_some(self.windows_left_out).flatten()
+        let [(_, a), (_, b)] = self.window_candidates()?;
+        (a < b - WINDOW_OUTLINE_SLACK).then_some((a, b))
     }
 
     /// Steps until done and returns the result.
