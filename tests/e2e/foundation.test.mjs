@@ -41,10 +41,12 @@ test('the rayon pool really runs on more than one thread', async () => {
   assert.ok(hw >= 2, `the test machine has ${hw} hardware threads; the check needs 2`);
   // On a loaded machine (CI shares 2 cores) one pool thread can be descheduled for the whole
   // probe; a pool that works shows > 1 thread within a few tries, a broken one never does.
+  // A probe of 64 jobs lasts about 5 ms: three of them once saw one thread on a loaded CI run,
+  // so up to twenty of 512 jobs (about 20 ms each) are tried.
   let threads = 0;
-  for (let attempt = 0; attempt < 3 && threads < 2; attempt += 1) {
+  for (let attempt = 0; attempt < 20 && threads < 2; attempt += 1) {
     ({ threads } = await page.evaluate(() =>
-      window.procfit.client.call(window.procfit.REQUESTS.THREAD_PROBE, { jobs: 64 }),
+      window.procfit.client.call(window.procfit.REQUESTS.THREAD_PROBE, { jobs: 512 }),
     ));
   }
   console.log(`# rayon pool threads seen in the browser: ${threads} (hardwareConcurrency ${hw})`);
