@@ -39,7 +39,9 @@ pub const RESCUE_RUNS: usize = 2;
 /// seed 1 on plain, gradient and textured ground and seed 0 on textured, 40 fits), the mean
 /// IoU-64 re-picked from the same candidates: the runs of the outline alone 0.925; slack 0 /
 /// 0.002 / 0.005 / 0.01 / 0.02 → 0.928 / 0.928 / 0.924 / 0.916 / 0.911 (keeping the windows in
-/// 6 / 11 / 14 / 20 / 21 fits); always the windows 0.770.
+/// 6 / 11 / 14 / 20 / 21 fits); always the windows 0.770. Seed 2 on textured ground at 0.002:
+/// 0.896 against 0.916 without windows, the house with dormers keeping its windows at the
+/// outline's IoU exactly and falling 0.887 → 0.696.
 pub const WINDOW_OUTLINE_SLACK: f64 = 0.002;
 
 /// Side of the preview silhouette of [`Session::preview`].
