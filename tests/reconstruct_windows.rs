@@ -238,6 +238,11 @@ fn window_labels_the_outline_contradicts_are_left_out() {
     );
     let note = procfit::reconstruct::eval::windows_left_out_note(left_out).unwrap();
     assert!(note.contains("left out"), "{note}");
+    assert!(
+        note.contains(&format!("IoU {with:.3} against {without:.3}")),
+        "{note}"
+    );
+    assert!(!note.contains("  "), "one line, single-spaced: {note}");
     // The runs of the outline are the fit's without labels: left out, the windows change nothing.
     let (without_labels, none) = run_with(&c, None);
     assert_eq!(none.windows_left_out(), None);

@@ -344,7 +344,10 @@ pub fn agreement_warning(agreement: Option<f64>) -> Option<String> {
 pub fn windows_left_out_note(left_out: Option<(f64, f64)>) -> Option<String> {
     let (with, without) = left_out?;
     Some(format!(
-        "the windows found were left out: the model fitted to them matched the outline less          well (IoU {with:.3} against {without:.3} without them), so the floors and window          columns are the outline's guess: check the windows (each should cover a window of the          building and nothing else), or add a photo"
+        "the windows found were left out: the model fitted to them matched the outline less \
+         well (IoU {with:.3} against {without:.3} without them), so the floors and window \
+         columns are the outline's guess: check the windows (each should cover a window of the \
+         building and nothing else), or add a photo"
     ))
 }
 

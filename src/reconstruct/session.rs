@@ -265,26 +265,14 @@ fn run_seed(seed: u64, k: usize) -> u64 {
 
 /// Run `k` of a fit of `masks` checked into `plan`: its own seed ([`run_seed`]), the
 /// refined-only variables at the middle of their range in the odd runs, from the generator's
-/// rescue seeds when `rescue`, with the plan's window labels only when `windows`.
+/// rescue seeds when `rescue`.
 fn start_run(
     config: &FitConfig,
     k: usize,
     masks: &[Mask],
     plan: &Plan,
     rescue: bool,
-    windows: bool,
 ) -> Result<Run, FitError> {
-    let outline_only;
-    let plan = match plan.windows.is_some() && !windows {
-        true => {
-            outline_only = Plan {
-                windows: None,
-                ..plan.clone()
-            };
-            &outline_only
-        }
-        false => plan,
-    };
     let c = FitConfig {
         seed: run_seed(config.seed, k),
         ..config.clone()
@@ -308,6 +296,11 @@ impl Session {
             masks
         };
         let plan = config.plan(&masks)?;
+        // The first runs fit the outline alone; the added ones ([`window_runs`]) the labels too.
+        let outline = Plan {
+            windows: None,
+            ..plan.clone()
+        };
         let added = match plan.windows {
             Some(_) => window_runs(config.restarts),
             None => 0,
@@ -318,8 +311,8 @@ impl Session {
         let runs = (0..windowed.len())
             .map(|k| match windowed[k] {
                 // The seeds of the first runs, as a fit of the labels alone makes them.
-                true => start_run(&config, k - config.restarts, &masks, &plan, false, true),
-                false => start_run(&config, k, &masks, &plan, false, false),
+                true => start_run(&config, k - config.restarts, &masks, &plan, false),
+                false => start_run(&config, k, &masks, &outline, false),
             })
             .collect::<Result<Vec<_>, _>>()?;
         Ok(Session {
@@ -356,16 +349,17 @@ impl Session {
         if ious.iter().all(|&iou| iou >= level) {
             return Ok(());
         }
-        // `auto` chose its generator: the rescue fits that one.
+        // `auto` chose its generator: the rescue fits that one, to the outline alone.
         let config = FitConfig {
             generator: g.name().into(),
+            windows: Vec::new(),
             ..self.config.clone()
         };
         let plan = config.plan(&self.masks)?;
         for _ in 0..RESCUE_RUNS {
             let k = self.runs.len();
             self.runs
-                .push(start_run(&config, k, &self.masks, &plan, true, false)?);
+                .push(start_run(&config, k, &self.masks, &plan, true)?);
             self.finished.push(None);
             self.outline.push(None);
             self.windowed.push(false);
@@ -422,7 +416,7 @@ impl Session {
     fn choose(&mut self) {
         let windowed = &self.windowed;
         self.window_candidates = None;
-        if windowed.iter().all(|&w| w) || !windowed.iter().any(|&w| w) {
+        if !windowed.iter().any(|&w| w) {
             self.best = pick(&self.finished, |_| true);
             return;
         }
