@@ -13,7 +13,9 @@
 //! `-- --quality Q` at Q; `-- --seed N` fits with seed N (0 by default: judge a change over
 //! several seeds); `-- --runs N` makes N runs a fit (the page's number by default);
 //! `-- NAME …` only those cases (`paper` for the paper's building); `-- --inputs mask,plain`
-//! only those inputs; `-- --paper-obj PATH` reads the paper's building from elsewhere;
+//! only those inputs; `-- --view YAW,ELEVATION` sees every case from there instead of its own
+//! camera (degrees; `0,1`: straight from the front, 1° up; the paper's building keeps its
+//! three); `-- --paper-obj PATH` reads the paper's building from elsewhere;
 //! The *3D agreement* column is what the CLI prints after a fit: how alike the runs that match
 //! the mask about as well are in 3D (`procfit::reconstruct::eval::agreement`); below
 //! `AGREEMENT_LEVEL` the CLI and the page warn that the mask does not fix the shape, and the
@@ -70,6 +72,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut save: Option<PathBuf> = None;
     let mut names = Vec::new();
     let mut inputs: Vec<Input> = Input::ALL.to_vec();
+    let mut camera: Option<(f64, f64)> = None;
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
@@ -80,6 +83,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "--save" => save = Some(PathBuf::from(it.next().ok_or("--save needs a folder")?)),
             "--paper-obj" => {
                 paper_obj = PathBuf::from(it.next().ok_or("--paper-obj needs a file")?)
+            }
+            "--view" => {
+                let v = it.next().ok_or("--view needs YAW,ELEVATION in degrees")?;
+                let (y, p) = v.split_once(',').ok_or("--view YAW,ELEVATION")?;
+                camera = Some((y.trim().parse()?, p.trim().parse()?));
             }
             "--inputs" => {
                 let list = it.next().ok_or("--inputs needs a list")?;
@@ -161,12 +169,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         if !wanted(case.name) {
             continue;
         }
+        let view = match camera {
+            Some((yaw, pitch)) => case_view(&case.mesh, yaw.to_radians(), pitch.to_radians())?,
+            None => case.view,
+        };
         if let Some(dir) = &save {
-            save_images(dir, case.name, &case.mesh, &case.view)?;
+            save_images(dir, case.name, &case.mesh, &view)?;
         }
         for &input in &inputs {
             run(case.name, case.kind, input, &|| {
-                fit_and_score_input(&case.mesh, &case.view, input, fit)
+                fit_and_score_input(&case.mesh, &view, input, fit)
             });
         }
     }

@@ -128,9 +128,9 @@ fn a_box_that_does_not_outline_its_photo_is_refitted_from_l_seeds() {
 /// length; the five-storey block on a gradient until the generator had chimneys. The agreement
 /// only sees what the runs disagree on: seen straight from the front at eye level the flat
 /// block, the shed-roofed studio and the gable house are fitted at the wrong depth (IoU-64
-/// 0.72–0.85) by runs that agree on it; `eval::depth_agreement` finds such a depth a guess
-/// from a few degrees up (the test below), not at eye level, where a set-back part moves in
-/// the photo when the depth changes.)
+/// 0.72–0.85) by runs that agree on it; `eval::depth_agreement` finds such a depth a guess,
+/// from a few degrees up by the photo (the tower below), at eye level by where the camera
+/// stands (the studio below).)
 #[test]
 fn a_house_whose_shape_the_photo_does_not_fix_is_flagged() {
     let case = case_named("hip-bungalow").unwrap();
@@ -154,6 +154,21 @@ fn a_tower_seen_straight_on_is_said_to_be_a_guess_in_depth() {
     let view = case_view(&case.mesh, 0.0, 3f64.to_radians()).unwrap();
     let s = fit_and_score_input(&case.mesh, &view, Input::Mask, settings(true)).unwrap();
     eprintln!("tower straight on: {s:?}");
+    let w = agreement_warning(s.agreement);
+    assert!(w.is_some(), "agreement {:?}", s.agreement);
+}
+
+/// The shed-roofed studio photographed straight from the front at eye level (1° up), from its
+/// mask: the photo shows its front and nothing of how far it reaches back, and the fit's runs
+/// agree on a wrong depth and roof (IoU-64 0.735 measured, photo-view IoU 0.994, 3D agreement
+/// of the runs none). The camera stands before the front, below the roof's top
+/// (`eval::front_only`), so the fit says the depth is a guess (agreement 0.832 measured).
+#[test]
+fn a_facade_seen_straight_on_at_eye_level_is_said_to_be_a_guess_in_depth() {
+    let case = case_named("shed-studio").unwrap();
+    let view = case_view(&case.mesh, 0.0, 1f64.to_radians()).unwrap();
+    let s = fit_and_score_input(&case.mesh, &view, Input::Mask, settings(true)).unwrap();
+    eprintln!("shed studio straight on: {s:?}");
     let w = agreement_warning(s.agreement);
     assert!(w.is_some(), "agreement {:?}", s.agreement);
 }

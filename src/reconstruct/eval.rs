@@ -253,20 +253,77 @@ pub const DEPTH_STRETCHES: [f32; 2] = [0.6, 1.6];
 /// kept: 0.015 also warns the tower at eye level (agreement 0.778, IoU-64 0.878) and the gable
 /// house from its end (0.802, 0.746), while the block and the studio at eye level stay just
 /// above the warning (0.863, 0.861): two more of fifteen such views, for a margin to the
-/// benchmark's least drop of 0.019 instead of 0.029.
+/// benchmark's least drop of 0.019 instead of 0.029. Photos that show a model only from the
+/// front need no slack: [`front_only`] says so from where their cameras stand.
 pub const DEPTH_SLACK: f64 = 0.005;
+
+/// How far off a side's normal a camera outside that side's extent may look and still count as
+/// seeing it straight on ([`front_only`]), degrees: a wall reaching back `d` then shows at most
+/// `d · sin 5°`, under a tenth of its depth.
+pub const STRAIGHT_ON_DEGREES: f64 = 5.0;
+
+/// Whether every photo shows the model (its mesh's bounds `lo`–`hi`, in its own frame) from
+/// straight before or behind it along the same axis of its footprint (X or Z) and nothing
+/// else of it: each camera, moved into
+/// the model's frame, stands before that side (beyond the bounds along the side's normal, X or
+/// Z), no higher than the model's top (so no roof top or roof slope beyond the top faces it)
+/// and within the side's width (so neither neighbouring wall faces it) or looking within
+/// [`STRAIGHT_ON_DEGREES`] of the side's normal. Such photos show nothing of how far the model
+/// reaches back, whatever its outline: a façade photographed straight on from the street. The
+/// perspective of set-back parts (a ridge, a stair house on a flat roof) still moves with the
+/// depth, but as much with the roof's pitch or the part's height, which the photo does not fix
+/// either.
+pub fn front_only(views: &[View], lo: Vec3, hi: Vec3) -> bool {
+    let (lo, hi) = (lo.as_dvec3(), hi.as_dvec3());
+    let axis = |view: &View| -> Option<usize> {
+        let rotation = view.params.rotation_and_derivatives()[0];
+        if !(view.params.scale.is_finite() && view.params.scale > 0.0) {
+            return None;
+        }
+        let eye = rotation.transpose() * (view.pose.position - view.params.translation)
+            / view.params.scale;
+        if !eye.is_finite() || eye.y > hi.y {
+            return None;
+        }
+        let centre = 0.5 * (lo + hi);
+        [0usize, 2].into_iter().find(|&a| {
+            let b = 2 - a;
+            let before = eye[a] < lo[a] || eye[a] > hi[a];
+            let within = (lo[b]..=hi[b]).contains(&eye[b]);
+            let off = (eye[b] - centre[b]).abs().atan2((eye[a] - centre[a]).abs());
+            before && (within || off <= STRAIGHT_ON_DEGREES.to_radians())
+        })
+    };
+    let mut axes = views.iter().map(axis);
+    let Some(Some(first)) = axes.next() else {
+        return false;
+    };
+    axes.all(|a| a == Some(first))
+}
 
 /// How well the photos fix the kept model's depth, for a generator whose shapes can be any
 /// depth at the same front outline
 /// ([`Capabilities::free_depth`](crate::generators::Capabilities::free_depth)): the kept
 /// model is stretched along the first photo's line of sight (made level, towards the model's
 /// centre), its front kept in place, by each of [`DEPTH_STRETCHES`], and each stretched copy
-/// that matches every photo about as well ([`DEPTH_SLACK`]) is an alternative the photos
-/// cannot rule out; the lowest
-/// IoU-64 (128², as [`agreement`]) between the kept model and such a copy, or `None` when
-/// the photos rule them all out (a roof or a side wall in view), the generator's depth is not
-/// free, or the camera looks straight down. The runs of a fit often agree on one depth (the
-/// seeds' proportions) when a photo does not show it, so [`agreement`] alone misses it.
+/// that matches every photo about as well ([`DEPTH_SLACK`]), or every copy when the photos
+/// show the model only from the front ([`front_only`]), is an alternative the photos cannot
+/// rule out; the lowest IoU-64 (128², as [`agreement`]) between the kept model and such a
+/// copy, or `None` when the photos rule them all out (a roof or a side wall in view), the
+/// generator's depth is not free, or the camera looks straight down. The runs of a fit often
+/// agree on one depth (the seeds' proportions) when a photo does not show it, so
+/// [`agreement`] alone misses it.
+///
+/// With [`front_only`], measured on the ten buildings of the independent benchmark seen from
+/// about their own height (`cargo bench --bench building_bench -- --inputs mask,textured --view
+/// Y,E --seed N`: straight from the front 1° up, from an end 1° up and from the front 3° below
+/// the centre, from masks and from photos on textured ground, seeds 0 and 1; 120 fits): such
+/// views are hard (65 fits below IoU-64 0.80, means per view and input 0.71–0.85, against
+/// 0.90–0.96 from the benchmark's own cameras 6–28° up), and the fit now says the shape is a
+/// guess for 98 of them instead of 48; the fits below 0.80 it does not warn about went from 37
+/// to 20 (their fitted camera is wrong: a corner seen at eye level, or the camera fitted high
+/// above, which one outline at eye level allows). No fit from the benchmark's own cameras sees
+/// a model only from the front (seeds 1–3, 129 fits): their warnings are unchanged.
 pub fn depth_agreement(kept: &FitResult, masks: &[Mask]) -> Result<Option<f64>, FitError> {
     let model = &kept.model;
     if !model.generator.capabilities().free_depth {
@@ -299,6 +356,7 @@ pub fn depth_agreement(kept: &FitResult, masks: &[Mask]) -> Result<Option<f64>, 
         .iter()
         .map(|&p| p.dot(axis))
         .fold(f32::INFINITY, f32::min);
+    let straight_on = front_only(&kept.views, lo, hi);
     let base = photo_view_ious(&mesh, &kept.views, masks)?;
     let mut lowest: Option<f64> = None;
     for k in DEPTH_STRETCHES {
@@ -311,8 +369,11 @@ pub fn depth_agreement(kept: &FitResult, masks: &[Mask]) -> Result<Option<f64>, 
             positions,
             ..mesh.clone()
         };
-        let ious = photo_view_ious(&stretched, &kept.views, masks)?;
-        if ious.iter().zip(&base).all(|(s, b)| *s >= b - DEPTH_SLACK) {
+        let matches = || -> Result<bool, FitError> {
+            let ious = photo_view_ious(&stretched, &kept.views, masks)?;
+            Ok(ious.iter().zip(&base).all(|(s, b)| *s >= b - DEPTH_SLACK))
+        };
+        if straight_on || matches()? {
             let a = iou64(
                 (&mesh.positions, &mesh.triangles),
                 (&stretched.positions, &stretched.triangles),
@@ -363,4 +424,57 @@ pub fn tree_match_warning(iou: f64, level: f64, labels_hint: &str) -> Option<Str
              object, or use a photo of one tree against a plain background"
         )
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::front_only;
+    use crate::camera::View;
+    use glam::{DVec3, Vec3};
+
+    /// A camera `distance` away at `azimuth` (radians, from +Z towards +X) and `height` above
+    /// the origin, looking at the origin; the object untransformed.
+    fn view(azimuth: f64, height: f64) -> View {
+        let mut v = View::turntable(64, 64, azimuth, 30.0, 0.5, DVec3::ZERO).unwrap_or_else(|e| {
+            panic!("{e}");
+        });
+        v.pose.position.y += height;
+        v
+    }
+
+    /// A box 20 wide (X), 6 tall and 10 deep (Z), its floor at the origin's height.
+    const LO: Vec3 = Vec3::new(-10.0, 0.0, -5.0);
+    const HI: Vec3 = Vec3::new(10.0, 6.0, 5.0);
+
+    #[test]
+    fn a_camera_before_a_side_and_below_the_top_sees_only_that_side() {
+        // Straight before the long side, at eye level, and before it within its width.
+        assert!(front_only(&[view(0.0, 1.6)], LO, HI));
+        assert!(
+            front_only(&[view(0.3, 1.6)], LO, HI),
+            "9 of 30 off the axis, 20 wide"
+        );
+        // Before the short side, straight on, and 4° off its normal (2 off it, 10 deep).
+        assert!(front_only(&[view(90f64.to_radians(), 3.0)], LO, HI));
+        assert!(front_only(&[view(86f64.to_radians(), 3.0)], LO, HI));
+        // From in front and from behind: still nothing of the depth.
+        assert!(front_only(&[view(0.0, 1.6), view(3.1, 1.6)], LO, HI));
+    }
+
+    #[test]
+    fn a_camera_that_sees_a_second_wall_or_the_roof_does_not() {
+        // A corner: both walls face the camera.
+        assert!(!front_only(&[view(45f64.to_radians(), 1.6)], LO, HI));
+        // Before the short side but 10° off its normal and outside its width (10 deep).
+        assert!(!front_only(&[view(80f64.to_radians(), 1.6)], LO, HI));
+        // Above the top: the roof shows the footprint.
+        assert!(!front_only(&[view(0.0, 7.0)], LO, HI));
+        // One photo from the front, one from the end: the end shows the depth.
+        assert!(!front_only(
+            &[view(0.0, 1.6), view(90f64.to_radians(), 1.6)],
+            LO,
+            HI
+        ));
+        assert!(!front_only(&[], LO, HI));
+    }
 }
