@@ -51,7 +51,7 @@ type Warned = (f64, bool, bool);
 fn warned_of(s: &BenchScore, level: f64) -> Warned {
     (
         s.iou64,
-        agreement_warning(s.agreement).is_some(),
+        agreement_warning(s.agreement, s.front_only).is_some(),
         photo_match_warning(&[s.mask_photo_iou], &[], level).is_some(),
     )
 }

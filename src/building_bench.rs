@@ -816,6 +816,8 @@ pub struct BenchScore {
     pub colour_de: Option<(Option<f64>, Option<f64>)>,
     /// How well the mask fixes the shape, as the CLI prints it ([`Session::agreement`]).
     pub agreement: Option<f64>,
+    /// Whether the photo shows the kept model only from the front ([`Session::front_only`]).
+    pub front_only: bool,
     /// Every run of the fit, when asked for ([`BenchFit::each`]); empty otherwise.
     pub runs: Vec<RunScore>,
     /// With window labels: whether the fit left them out ([`Session::windows_left_out`]).
@@ -884,6 +886,7 @@ fn fit_scored(
     let mut session = Session::new(config, vec![mask])?;
     let result = session.run()?;
     let agreement = session.agreement()?;
+    let front_only = session.front_only()?;
     let (iou, mesh) = fit_iou64(&result, truth, view)?;
     let fitted = result
         .views
@@ -967,6 +970,7 @@ fn fit_scored(
         mask_photo_iou,
         colour_de,
         agreement,
+        front_only,
         runs,
         windows_left_out: session.windows_left_out().is_some(),
         window_candidates: match (session.window_candidates(), fit.each) {

@@ -365,7 +365,7 @@ pub fn fit_case(
         }
     }
     let agreement = session.agreement()?;
-    if let Some(w) = eval::agreement_warning(agreement) {
+    if let Some(w) = eval::agreement_warning(agreement, session.front_only()?) {
         warnings.push(w);
     }
     let kept = score_fit(case, &result)?;

@@ -441,6 +441,7 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
     });
     let result = session.result().map_err(|e| e.to_string())?;
     let agreement = session.agreement().map_err(|e| e.to_string())?;
+    let front_only = session.front_only().map_err(|e| e.to_string())?;
     let colors = if a.default_colors {
         procfit::model::PartColors::new()
     } else {
@@ -474,7 +475,7 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
     );
     report_rescue(&session, &result);
     report_photo_match(&result, &masks, &a.images)?;
-    report_agreement(agreement);
+    report_agreement(agreement, front_only);
     if let Some(note) = eval::windows_left_out_note(session.windows_left_out()) {
         println!("{note}");
     }
@@ -509,14 +510,14 @@ fn report_rescue(session: &Session, result: &reconstruct::FitResult) {
 
 /// Prints how well the photos fix the shape (the 3D agreement of the runs that matched them
 /// about as well as the kept one, [`eval::agreement`]) and, when they do not, a warning saying
-/// what to try.
-fn report_agreement(agreement: Option<f64>) {
+/// what to try (about the depth when the photos show only the front, `front_only`).
+fn report_agreement(agreement: Option<f64>, front_only: bool) {
     if let Some(a) = agreement {
         println!(
             "3D agreement of the runs that match the photos as well: {a:.3} (1 = the same shape)"
         );
     }
-    if let Some(w) = eval::agreement_warning(agreement) {
+    if let Some(w) = eval::agreement_warning(agreement, front_only) {
         eprintln!("procfit: warning: {w}");
     }
 }

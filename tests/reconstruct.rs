@@ -665,14 +665,14 @@ fn agreement_compares_the_runs_that_match_as_well_through_their_cameras() {
     same.views[0].params.translation *= 2.0;
     let a = agreement(&kept, [&kept, &same]).unwrap().unwrap();
     assert!(a > 0.99, "the same shape agrees: {a}");
-    assert_eq!(agreement_warning(Some(a)), None);
+    assert_eq!(agreement_warning(Some(a), false), None);
     // A dish 0.4 times as tall, through the same camera: another shape.
     let mut deeper = same.clone();
     let h = g.params().iter().position(|p| p.name == "y_scale").unwrap();
     deeper.model.params[h] *= 0.4;
     let b = agreement(&kept, [&deeper]).unwrap().unwrap();
     assert!(b < AGREEMENT_LEVEL, "another shape disagrees: {b}");
-    assert!(agreement_warning(Some(b)).is_some());
+    assert!(agreement_warning(Some(b), false).is_some());
     // The same other shape with its handle pinched (what a turned handle fitted side-on looks
     // like): the tie-break finds it less plausible than the kept fit, so it is no alternative.
     let mut pinched = deeper.clone();

@@ -385,17 +385,44 @@ pub fn depth_agreement(kept: &FitResult, masks: &[Mask]) -> Result<Option<f64>, 
     Ok(lowest)
 }
 
+/// Whether the kept model of a fit whose generator's depth is free
+/// ([`Capabilities::free_depth`](crate::generators::Capabilities::free_depth)) is seen only
+/// from the front in every photo ([`front_only`]); false for any other generator.
+pub fn fit_front_only(kept: &FitResult) -> Result<bool, FitError> {
+    let model = &kept.model;
+    if !model.generator.capabilities().free_depth {
+        return Ok(false);
+    }
+    let mesh = model
+        .generator
+        .generate(&model.params, model.lod)
+        .map_err(|e| FitError(e.to_string()))?;
+    Ok(mesh
+        .bounds()
+        .is_some_and(|(lo, hi)| front_only(&kept.views, lo, hi)))
+}
+
 /// The one-line verdict on an [`agreement`]: `None` at [`AGREEMENT_LEVEL`] or better (or
-/// without one), else what it means and what to try.
-pub fn agreement_warning(agreement: Option<f64>) -> Option<String> {
+/// without one), else what it means and what to try; `front_only` when the photos show the
+/// model only from the front ([`fit_front_only`]): then its depth is what they do not show.
+pub fn agreement_warning(agreement: Option<f64>, front_only: bool) -> Option<String> {
     let a = agreement?;
     (a < AGREEMENT_LEVEL).then(|| {
-        format!(
-            "the photo does not fix the shape: other fits match it about as well but differ in \
-             3D (agreement {a:.2} < {AGREEMENT_LEVEL:.2}), so what it does not show (depth, \
-             the far side, the roof) is a guess: add a photo from another side, or check the \
-             sliders"
-        )
+        if front_only {
+            format!(
+                "the photo shows only the front, from about the model's own height: how far \
+                 it reaches back (its depth) and what lies behind are a guess (agreement {a:.2} \
+                 < {AGREEMENT_LEVEL:.2}): add a photo from a corner, or set the depth with the \
+                 sliders"
+            )
+        } else {
+            format!(
+                "the photo does not fix the shape: other fits match it about as well but differ \
+                 in 3D (agreement {a:.2} < {AGREEMENT_LEVEL:.2}), so what it does not show \
+                 (depth, the far side, the roof) is a guess: add a photo from another side, or \
+                 check the sliders"
+            )
+        }
     })
 }
 

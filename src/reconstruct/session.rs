@@ -582,6 +582,17 @@ impl Session {
         })
     }
 
+    /// Whether the photos show the kept model only from the front, once every run is done
+    /// ([`eval::fit_front_only`]): then [`Session::agreement`] is about its depth.
+    ///
+    /// [`eval::fit_front_only`]: super::eval::fit_front_only
+    pub fn front_only(&self) -> Result<bool, FitError> {
+        match self.best_finished() {
+            Some((kept, _)) if self.is_done() => super::eval::fit_front_only(kept),
+            _ => Ok(false),
+        }
+    }
+
     /// The best finished run's result and last progress.
     fn best_finished(&self) -> Option<&(FitResult, Progress)> {
         self.finished.get(self.best?)?.as_ref()

@@ -335,7 +335,10 @@ impl FitSession {
         let agreement = self.session.agreement().map_err(js)?;
         let out = ResultOut {
             agreement,
-            agreement_warning: eval::agreement_warning(agreement),
+            agreement_warning: eval::agreement_warning(
+                agreement,
+                self.session.front_only().map_err(js)?,
+            ),
             windows_note: eval::windows_left_out_note(self.session.windows_left_out()),
             match_warning: eval::photo_match_warning(&photo_ious, &[], match_level),
             match_level,
