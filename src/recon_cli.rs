@@ -479,6 +479,9 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
     if let Some(note) = eval::windows_left_out_note(session.windows_left_out()) {
         println!("{note}");
     }
+    if let Some(note) = eval::one_view_caveat(&result) {
+        println!("note: {note}");
+    }
     Ok(())
 }
 

@@ -695,3 +695,39 @@ fn agreement_compares_the_runs_that_match_as_well_through_their_cameras() {
         "outside the window"
     );
 }
+
+/// Issue 16: a mug fitted from one photo says what one photo cannot tell (its handle's turn
+/// against its reach); a mug from two photos, a bowl without a handle, nothing.
+#[test]
+fn a_mug_from_one_photo_says_its_handle_is_a_guess() {
+    use procfit::generators::dish::P_HAS_HANDLE;
+    use procfit::reconstruct::eval::one_view_caveat;
+    let mut rng = Rng::new(5);
+    let params = generator("dish").preset("mug").unwrap().values;
+    let mesh = mesh_of("dish", &params, Lod::Low);
+    let view = random_view_at(&mut rng, &mesh, 0.5, 0.0);
+    let one = fit(
+        FitConfig {
+            quality: 0.2,
+            restarts: 1,
+            ..config(1, 0.2)
+        },
+        vec![render_mask(&mesh, &view, 64)],
+    );
+    assert!(
+        one.model.params[P_HAS_HANDLE] > 0.5,
+        "fitted without a handle"
+    );
+    let said = one_view_caveat(&one).unwrap_or_default();
+    assert!(
+        said.contains("handle turned towards the camera"),
+        "{said:?}"
+    );
+    assert!(said.contains("add a photo"), "{said:?}");
+    let mut two = one.clone();
+    two.views.push(two.views[0]);
+    assert_eq!(one_view_caveat(&two), None, "two photos");
+    let mut bowl = one.clone();
+    bowl.model.params[P_HAS_HANDLE] = 0.0;
+    assert_eq!(one_view_caveat(&bowl), None, "no handle");
+}

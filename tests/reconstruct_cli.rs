@@ -54,7 +54,7 @@ fn render_reconstruct_eval_round_trip() {
         s(&mask),
     ]);
     let (glb, params) = (scratch("fit.glb"), scratch("fit.json"));
-    let (_, err) = run_ok(&[
+    let (said, err) = run_ok(&[
         "reconstruct",
         "--generator",
         "dish",
@@ -77,6 +77,11 @@ fn render_reconstruct_eval_round_trip() {
     assert!(
         !err.contains("does not match"),
         "a good fit is not warned about: {err}"
+    );
+    // What one photo of a mug cannot tell is said (`eval::one_view_caveat`).
+    assert!(
+        said.contains("note: one photo cannot tell a handle turned towards the camera"),
+        "{said}"
     );
     let doc = procfit::model::Model::from_json(&std::fs::read_to_string(&params).unwrap()).unwrap();
     assert_eq!(doc.generator.name(), "dish");

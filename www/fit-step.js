@@ -84,14 +84,16 @@ function colorNote(r) {
  * the photo's fitted camera against the photo's mask, don't-care excluded), and, below the
  * core's level, that it does not match and what to do (the core's sentence); then, when other
  * fits matched the photos as well but differ in 3D (the core's agreement below its level),
- * that the photos do not fix the shape; and when the windows found were left out, that they
- * were and why (the core's sentence). Empty without numbers.
- * @param {{ photo_ious?: number[], match_level?: number, match_warning?: string | null, agreement_warning?: string | null, windows_note?: string | null, carved_photo_iou?: number }} r
+ * that the photos do not fix the shape; when the windows found were left out, that they
+ * were and why (the core's sentence); and what one photo cannot tell about the fitted shape
+ * (the core's caveat, not a warning). Empty without numbers.
+ * @param {{ photo_ious?: number[], match_level?: number, match_warning?: string | null, agreement_warning?: string | null, windows_note?: string | null, caveat?: string | null, carved_photo_iou?: number }} r
  */
 export function showMatch(r) {
   const ious = r.photo_ious ?? [];
   fitMatch.dataset.agreement = r.agreement_warning ? 'ambiguous' : '';
   fitMatch.dataset.windows = r.windows_note ? 'left-out' : '';
+  fitMatch.dataset.caveat = r.caveat ? 'one-view' : '';
   if (!ious.length) {
     say(fitMatch, '');
     fitMatch.dataset.match = '';
@@ -99,6 +101,8 @@ export function showMatch(r) {
   }
   const sentence = (/** @type {string | null | undefined} */ t) => t ? ` ${t.charAt(0).toUpperCase()}${t.slice(1)}.` : '';
   const ambiguity = sentence(r.agreement_warning) + sentence(r.windows_note);
+  // What one photo cannot tell (a mug's handle): said, not a warning.
+  const caveat = sentence(r.caveat);
   const each = ious.map((v, i) => `${ious.length > 1 ? `photo ${i + 1} ` : ''}${v.toFixed(2)}`).join(', ');
   const level = typeof r.match_level === 'number' ? r.match_level.toFixed(2) : '';
   // A tree's leaves are then carved where the photo sees through its crown: its overlap as shown.
@@ -106,10 +110,10 @@ export function showMatch(r) {
   const numbers = `How well the fitted model matches ${ious.length > 1 ? 'each photo' : 'the photo'} (outline overlap, 1 = exact): ${each}.${carved}`;
   if (r.match_warning) {
     const why = r.match_warning.charAt(0).toUpperCase() + r.match_warning.slice(1);
-    say(fitMatch, `${numbers} ${why}.${ambiguity}`, 'warn');
+    say(fitMatch, `${numbers} ${why}.${ambiguity}${caveat}`, 'warn');
     fitMatch.dataset.match = 'poor';
   } else {
-    say(fitMatch, `${numbers} That is a match (${level} or better).${ambiguity}`, ambiguity ? 'warn' : 'info');
+    say(fitMatch, `${numbers} That is a match (${level} or better).${ambiguity}${caveat}`, ambiguity ? 'warn' : 'info');
     fitMatch.dataset.match = 'good';
   }
 }

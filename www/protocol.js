@@ -64,11 +64,12 @@ export const REQUESTS = Object.freeze({
   //   masks: [{ width, height, codes, windows?: ArrayBuffer | null, focal_35mm?: number | null }] }
   // → { cancelled, result: { generator, params, lod, seed, loss, evaluations, cameras,
   //   photo_ious: number[] (one a photo), match_level, match_warning?: string,
-  //   agreement?: number, agreement_warning?: string, windows_note?: string } }
+  //   agreement?: number, agreement_warning?: string, windows_note?: string, caveat?: string } }
   // `agreement`: the 3D agreement of the runs that matched the photos as well (null before the
   // end, with one run, or when no other run did); `agreement_warning`: a sentence below the level.
   // `windows_note`: a sentence when the masks' window labels were left out (a model fitted to them
-  // matched the outline less well than one fitted to the outline alone).
+  // matched the outline less well than one fitted to the outline alone). `caveat`: what one photo
+  // cannot tell about the fitted shape (a mug's handle), after a fit from one photo.
   // `start`: the named generator's parameters to start from ("Refit from here"); a mask's
   // `focal_35mm` (from PHOTO_FOCAL) sets that view's field of view, else the default is used;
   // a mask's `windows` (labels as MASK_WINDOWS_* give them) adds the window term of a building.

@@ -504,6 +504,14 @@ pub trait Generator: Send + Sync {
         &[]
     }
 
+    /// What one photo cannot tell about a shape with these parameters, however well the fit
+    /// outlines it, and what to do: said after every fit from one photo (procfit's
+    /// `eval::one_view_caveat`). `None` by default.
+    fn one_view_caveat(&self, params: &[f64]) -> Option<&'static str> {
+        let _ = params;
+        None
+    }
+
     /// The initial population the memetic optimiser starts from (paper §3.2: presets are
     /// concatenated into the initial population). Defaults to the presets' values.
     fn seeds(&self) -> Vec<Vec<f64>> {

@@ -426,6 +426,15 @@ pub fn agreement_warning(agreement: Option<f64>, front_only: bool) -> Option<Str
     })
 }
 
+/// What one photo cannot tell about the fitted shape, after a fit from one photo
+/// ([`Generator::one_view_caveat`]); `None` with several photos or nothing to say.
+pub fn one_view_caveat(result: &FitResult) -> Option<&'static str> {
+    let model = &result.model;
+    (result.views.len() == 1)
+        .then(|| model.generator.one_view_caveat(&model.params))
+        .flatten()
+}
+
 /// The one-line note on [`Session::windows_left_out`](super::Session::windows_left_out):
 /// `None` when the window labels were used (or there were none), else that they were not and
 /// what to try.

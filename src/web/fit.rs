@@ -67,6 +67,8 @@ struct ResultOut {
     agreement_warning: Option<String>,
     /// That the window labels given were left out, and why (`eval::windows_left_out_note`).
     windows_note: Option<String>,
+    /// What one photo cannot tell about the fitted shape (`eval::one_view_caveat`).
+    caveat: Option<String>,
 }
 
 /// Masks from 8-bit codes (object 255, background 0, don't care 128, anything else a soft
@@ -340,6 +342,7 @@ impl FitSession {
                 self.session.front_only().map_err(js)?,
             ),
             windows_note: eval::windows_left_out_note(self.session.windows_left_out()),
+            caveat: eval::one_view_caveat(&r).map(String::from),
             match_warning: eval::photo_match_warning(&photo_ious, &[], match_level),
             match_level,
             photo_ious,
