@@ -324,6 +324,13 @@ pub fn front_only(views: &[View], lo: Vec3, hi: Vec3) -> bool {
 /// to 20 (their fitted camera is wrong: a corner seen at eye level, or the camera fitted high
 /// above, which one outline at eye level allows). No fit from the benchmark's own cameras sees
 /// a model only from the front (seeds 1–3, 129 fits): their warnings are unchanged.
+///
+/// Tried and not kept: asking the fit instead, by refining the kept run (Adam at stage 2's
+/// detail, 40–100 steps) with the depth parameter held at 0.6 and 1.6 times its value, against
+/// the same refinement with it free. Seen straight on 1° up the held runs mostly ended at
+/// 1.4–37 times the free run's loss (the studio 2.9–4.1 at 100 steps, its kept hip roof a guess
+/// itself): within 10 % only the tower of the ten at 40 steps, the tower and the flat block of
+/// five at 100, where the photos show no depth for any of them.
 pub fn depth_agreement(kept: &FitResult, masks: &[Mask]) -> Result<Option<f64>, FitError> {
     let model = &kept.model;
     if !model.generator.capabilities().free_depth {

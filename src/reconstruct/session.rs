@@ -196,6 +196,13 @@ pub struct Session {
 /// The loss scaled by (1 + w × tie prior) over all runs instead of the tie: w = 2 / 3 / 5,
 /// 0.950 / 0.950 / 0.949 (worst 0.816–0.837), within the seeds' noise of this rule. The best
 /// run of each tie would give 0.965 (worst 0.816), the best of all runs 0.973 (worst 0.900).
+/// Also re-picked and not kept: the run whose fitted yaw most runs share (within 5–10°) 0.949
+/// (worst 0.729), the median yaw 0.946 (0.729); the least varied handle radii (a handle nearest a
+/// circular arc) in a 20 % tie 0.957 (worst 0.843), a prior that only favours this mug's round
+/// handle; the lowest loss among the tied runs within 0.005 of the least pinch 0.950–0.951
+/// (worst 0.816–0.837). One outline cannot settle it: a handle's outline seen turned by θ is,
+/// but for perspective, that of a handle stretched by cos θ / cos θ′ and sheared up or down,
+/// seen turned by θ′ (`Generator::one_view_caveat` says so after the fit).
 /// On the paper's building (five seeds × three cameras, `cargo bench --bench building_bench --
 /// --each paper`) the highest photo-view IoU instead of the lowest loss: 0.931 → 0.910.
 ///
