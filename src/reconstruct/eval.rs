@@ -331,6 +331,13 @@ pub fn front_only(views: &[View], lo: Vec3, hi: Vec3) -> bool {
 /// 1.4–37 times the free run's loss (the studio 2.9–4.1 at 100 steps, its kept hip roof a guess
 /// itself): within 10 % only the tower of the ten at 40 steps, the tower and the flat block of
 /// five at 100, where the photos show no depth for any of them.
+///
+/// Nor for a dish seen from high above, stretched along its own axis from its rim down (the
+/// same stretches): on the Mitsuba dish photos (`cargo bench --bench dish_photo_bench -- --fov
+/// known`, seed 0) a stretched copy outlines its photo 0.15–0.53 worse, the serving bowl from
+/// 55° 0.031–0.047 worse: up to 60° the outline shows how deep a dish is, and the fits from
+/// high above that go wrong trade the camera's height for the shape, which a stretch does not
+/// try (`tests/from_above.rs`).
 pub fn depth_agreement(kept: &FitResult, masks: &[Mask]) -> Result<Option<f64>, FitError> {
     let model = &kept.model;
     if !model.generator.capabilities().free_depth {
