@@ -987,8 +987,8 @@ impl Generator for Dish {
     /// shorter one seen side-on (nor one leaning up from one leaning down): the two outline
     /// a photo alike and differ in 3D. Measured on the measured mug from 96 random cameras
     /// (`cargo bench --bench reconstruct -- mug --cameras 96 --each`): in 9 fits the kept
-    /// run's IoU-64 is below 0.90 (down to 0.808), its handle turned 10–30° from the truth's,
-    /// while its photo-view IoU (0.991–0.994) is that of the right runs; no choice among the
+    /// run's IoU-64 is below 0.90 (down to 0.808), its handle turned 8–30° from the truth's,
+    /// while its photo-view IoU (0.991–0.995) is that of the right runs; no choice among the
     /// runs by what the mask shows (loss, photo-view IoU, the handle's hole) tells them apart.
     fn one_view_caveat(&self, params: &[f64]) -> Option<&'static str> {
         params
