@@ -149,11 +149,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         s.mask_photo_iou,
                         agreement_cell(s.agreement)
                     );
-                    if let Some([(a, x), (b, y)]) = s.window_candidates {
-                        eprintln!(
-                            "    windows: the best run fitting them outline {a:.4}, IoU-64 {x:.3}; of the outline alone {b:.4}, {y:.3}"
-                        );
-                    }
                     print_runs(&s);
                     warned.push(warned_of(&s, level));
                     let row = (s.iou64, s.photo_iou, secs);
@@ -221,11 +216,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                                 t.elapsed().as_secs_f64(),
                                 agreement_cell(s.agreement)
                             );
-                            if let Some([(a, x), (b, y)]) = s.window_candidates {
-                                eprintln!(
-                                    "    windows: the best run fitting them outline {a:.4}, IoU-64 {x:.3}; of the outline alone {b:.4}, {y:.3}"
-                                );
-                            }
                             print_runs(&s);
                             warned.push(warned_of(&s, level));
                         }
@@ -278,8 +268,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     Ok(())
 }
 
-/// With `--each`, the runs of a fit on stderr, the kept one marked.
+/// With `--each`, the runs of a fit on stderr, the kept one marked, after the two candidates of
+/// a fit with window labels.
 fn print_runs(s: &BenchScore) {
+    if let Some([(a, x), (b, y)]) = s.window_candidates {
+        eprintln!(
+            "    windows: the best run fitting them outline {a:.4}, IoU-64 {x:.3}; of the outline alone {b:.4}, {y:.3}"
+        );
+    }
     for (k, r) in s.runs.iter().enumerate() {
         eprintln!(
             "    run {k}{}: loss {:.5}, tie prior {:.3}, IoU-64 {:.3}, against the kept run {:.3}, photo-view IoU {:.4}, {}",

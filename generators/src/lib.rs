@@ -507,8 +507,7 @@ pub trait Generator: Send + Sync {
     /// What one photo cannot tell about a shape with these parameters, however well the fit
     /// outlines it, and what to do: said after every fit from one photo (procfit's
     /// `eval::one_view_caveat`). `None` by default.
-    fn one_view_caveat(&self, params: &[f64]) -> Option<&'static str> {
-        let _ = params;
+    fn one_view_caveat(&self, _params: &[f64]) -> Option<&'static str> {
         None
     }
 

@@ -275,6 +275,7 @@ pub const STRAIGHT_ON_DEGREES: f64 = 5.0;
 /// either.
 pub fn front_only(views: &[View], lo: Vec3, hi: Vec3) -> bool {
     let (lo, hi) = (lo.as_dvec3(), hi.as_dvec3());
+    let centre = 0.5 * (lo + hi);
     let axis = |view: &View| -> Option<usize> {
         let rotation = view.params.rotation_and_derivatives()[0];
         if !(view.params.scale.is_finite() && view.params.scale > 0.0) {
@@ -285,7 +286,6 @@ pub fn front_only(views: &[View], lo: Vec3, hi: Vec3) -> bool {
         if !eye.is_finite() || eye.y > hi.y {
             return None;
         }
-        let centre = 0.5 * (lo + hi);
         [0usize, 2].into_iter().find(|&a| {
             let b = 2 - a;
             let before = eye[a] < lo[a] || eye[a] > hi[a];
@@ -339,17 +339,12 @@ pub fn front_only(views: &[View], lo: Vec3, hi: Vec3) -> bool {
 /// high above that go wrong trade the camera's height for the shape, which a stretch does not
 /// try (`tests/from_above.rs`).
 pub fn depth_agreement(kept: &FitResult, masks: &[Mask]) -> Result<Option<f64>, FitError> {
-    let model = &kept.model;
-    if !model.generator.capabilities().free_depth {
-        return Ok(None);
-    }
     let Some(view) = kept.views.first() else {
         return Ok(None);
     };
-    let mesh = model
-        .generator
-        .generate(&model.params, model.lod)
-        .map_err(|e| FitError(e.to_string()))?;
+    let Some(mesh) = free_depth_mesh(kept)? else {
+        return Ok(None);
+    };
     let Some((lo, hi)) = mesh.bounds() else {
         return Ok(None);
     };
@@ -371,7 +366,11 @@ pub fn depth_agreement(kept: &FitResult, masks: &[Mask]) -> Result<Option<f64>, 
         .map(|&p| p.dot(axis))
         .fold(f32::INFINITY, f32::min);
     let straight_on = front_only(&kept.views, lo, hi);
-    let base = photo_view_ious(&mesh, &kept.views, masks)?;
+    // Without the photos' say, the kept model's own photo-view IoUs are not needed.
+    let base = match straight_on {
+        true => Vec::new(),
+        false => photo_view_ious(&mesh, &kept.views, masks)?,
+    };
     let mut lowest: Option<f64> = None;
     for k in DEPTH_STRETCHES {
         let positions: Vec<Vec3> = mesh
@@ -403,17 +402,23 @@ pub fn depth_agreement(kept: &FitResult, masks: &[Mask]) -> Result<Option<f64>, 
 /// ([`Capabilities::free_depth`](crate::generators::Capabilities::free_depth)) is seen only
 /// from the front in every photo ([`front_only`]); false for any other generator.
 pub fn fit_front_only(kept: &FitResult) -> Result<bool, FitError> {
+    Ok(free_depth_mesh(kept)?
+        .and_then(|mesh| mesh.bounds())
+        .is_some_and(|(lo, hi)| front_only(&kept.views, lo, hi)))
+}
+
+/// The kept model's mesh when its generator's depth is free
+/// ([`Capabilities::free_depth`](crate::generators::Capabilities::free_depth)), else `None`.
+fn free_depth_mesh(kept: &FitResult) -> Result<Option<Mesh>, FitError> {
     let model = &kept.model;
     if !model.generator.capabilities().free_depth {
-        return Ok(false);
+        return Ok(None);
     }
-    let mesh = model
+    model
         .generator
         .generate(&model.params, model.lod)
-        .map_err(|e| FitError(e.to_string()))?;
-    Ok(mesh
-        .bounds()
-        .is_some_and(|(lo, hi)| front_only(&kept.views, lo, hi)))
+        .map(Some)
+        .map_err(|e| FitError(e.to_string()))
 }
 
 /// The one-line verdict on an [`agreement`]: `None` at [`AGREEMENT_LEVEL`] or better (or
