@@ -504,6 +504,14 @@ pub trait Generator: Send + Sync {
         &[]
     }
 
+    /// The range a fit from scratch searches for parameter `index` where it is narrower than
+    /// the spec's: values the fit cannot judge and would choose blindly (`None`, the default:
+    /// the spec's range). A refit from the user's model (procfit's `FitConfig::start`)
+    /// searches the whole range, so what the user set stays within reach.
+    fn fit_range(&self, _index: usize) -> Option<(f64, f64)> {
+        None
+    }
+
     /// What one photo cannot tell about a shape with these parameters, however well the fit
     /// outlines it, and what to do: said after every fit from one photo (procfit's
     /// `eval::one_view_caveat`). `None` by default.
