@@ -504,11 +504,12 @@ pub trait Generator: Send + Sync {
         &[]
     }
 
-    /// The range a fit from scratch searches for parameter `index` where it is narrower than
-    /// the spec's: values the fit cannot judge and would choose blindly (`None`, the default:
-    /// the spec's range). A refit from the user's model (procfit's `FitConfig::start`)
-    /// searches the whole range, so what the user set stays within reach.
-    fn fit_range(&self, _index: usize) -> Option<(f64, f64)> {
+    /// The values of parameter `index` a fit keeps only when its finest stage's views ask for
+    /// them (`None`, the default: every value): detail that stage 1 at LOW does not show and
+    /// chooses blindly. When stage 3 (at its finer detail) starts, each parameter outside its
+    /// range is tried at the nearest value inside it and kept there when the views fit as well
+    /// (procfit's `handover::simplify_detail`), unless the fit starts from the user's model.
+    fn plain_range(&self, _index: usize) -> Option<(f64, f64)> {
         None
     }
 

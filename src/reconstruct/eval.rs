@@ -207,9 +207,9 @@ pub const AGREEMENT_WINDOW: f64 = 0.25;
 /// does not vouch for it (the runs often agree on a wrong shape; [`photo_match_warning`]
 /// catches some of those). Since the building's photos are cut closer to their outline and a
 /// fit adds runs from L footprints, 1 of 215 (the paper's building from (140°, 28°) at seed
-/// 3, 0.845), and the 8 fits below 0.80 are not warned; since a fit's stripes are never
-/// balconies and the roof's kind is a structure choice, 2 (0.922 and 0.881), and the 3 fits
-/// below 0.80 are not.
+/// 3, 0.845), and the 8 fits below 0.80 are not warned; since stage 3 takes off the balconies
+/// its views do not ask for and the roof's kind is a structure choice, 2 (0.795 and 0.960),
+/// and 3 of the 4 fits below 0.80 are not.
 pub const AGREEMENT_LEVEL: f64 = 0.85;
 
 /// How well the photos fix the shape: the lowest [`fit_agreement`] between the kept fit and

@@ -43,6 +43,43 @@ fn simplify(
     spent
 }
 
+/// Occam's step for detail at the start of stage 3: every parameter outside the generator's
+/// [`plain_range`](crate::generators::Generator::plain_range) (a building's balcony stripe) is
+/// set to the nearest value inside it when that fits the views as well, within
+/// [`SIMPLER_TOLERANCE`], at stage 3's detail — the first the detail shows at — so what stage
+/// 1 chose blindly stays only where the views ask for it. Returns the evaluations spent.
+pub(super) fn simplify_detail(
+    objective: &FitObjective,
+    generator: &dyn crate::generators::Generator,
+    x: &mut [f64],
+) -> usize {
+    let n = generator.params().len();
+    let outside: Vec<(usize, f64)> = (0..n)
+        .filter_map(|i| {
+            let (lo, hi) = generator.plain_range(i)?;
+            let plain = x[i].clamp(lo, hi);
+            (plain != x[i]).then_some((i, plain))
+        })
+        .collect();
+    if outside.is_empty() {
+        return 0;
+    }
+    let mut spent = 1;
+    let mut current = objective.value(x);
+    for (i, plain) in outside {
+        let kept = x[i];
+        x[i] = plain;
+        let value = objective.value(x);
+        spent += 1;
+        if value <= current * (1.0 + SIMPLER_TOLERANCE) {
+            current = value.min(current);
+        } else {
+            x[i] = kept;
+        }
+    }
+    spent
+}
+
 /// Stage-1 individuals tried at stage-2 resolution before stage 2 commits to one.
 pub(super) const PROBES: usize = 4;
 

@@ -4,7 +4,7 @@
 
 use super::FitError;
 use super::config::{FitConfig, Plan};
-use super::handover::{PROBES, probe, probe_starts, with_refined_middles};
+use super::handover::{PROBES, probe, probe_starts, simplify_detail, with_refined_middles};
 use super::layout_search::{SWEEP_WORK, window_sweep};
 use super::objective::{FitObjective, Layout, render_coverage, resample_mask};
 use super::rim::RimTerm;
@@ -355,8 +355,9 @@ impl Run {
         }
     }
 
-    /// Builds gradient stage `stage` (2 or 3) from point `x`.
-    fn start_adam(&self, stage: u8, x: Vec<f64>) -> Phase {
+    /// Builds gradient stage `stage` (2 or 3) from point `x` (stage 3's after Occam's step for
+    /// detail, [`simplify_detail`]).
+    fn start_adam(&mut self, stage: u8, mut x: Vec<f64>) -> Phase {
         let search = &self.searches[self.current];
         let g = search.generator;
         let i = usize::from(stage - 1);
@@ -374,6 +375,11 @@ impl Run {
         .with_windows(self.windows.clone())
         .with_rim(self.rim[i].clone());
         let domain = search.memetic.domain().clone();
+        // Detail stage 1 chose blindly (a building's balconies) stays only where stage 3's
+        // views ask for it; the user's own model keeps what the user set.
+        if stage == 3 && self.config.start.is_none() {
+            self.evaluations += simplify_detail(&objective, g, &mut x);
+        }
         let mut adam = Adam::new(
             &domain,
             &AdamConfig {

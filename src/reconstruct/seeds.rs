@@ -66,8 +66,7 @@ pub(super) fn refined_at_middle(g: &dyn Generator, mut shapes: Vec<Vec<f64>>) ->
 /// The layout, the domain and the seed points of a generator's stage 1: `start` (if any) and
 /// then each of `shapes` (the generator's seeds, or its extra seeds), × each camera candidate
 /// (yaw turns too when `turn`), with scale and translation solved per view from the mask's
-/// bounding box. The domain is the parameters' ranges, narrowed by the generator's
-/// [`fit_range`](Generator::fit_range) when there is no `start`.
+/// bounding box.
 pub(super) fn start_points(
     g: &'static dyn Generator,
     shapes: Vec<Vec<f64>>,
@@ -140,15 +139,6 @@ pub(super) fn start_points(
         .map_err(|e| FitError(e.to_string()))?
         .vars()
         .to_vec();
-    if start.is_none() {
-        // The seeds (presets with balconies, say) are clamped into it by stage 1.
-        for (i, var) in vars.iter_mut().enumerate() {
-            if let Some((lo, hi)) = g.fit_range(i) {
-                var.min = var.min.max(lo);
-                var.max = var.max.min(hi).max(var.min);
-            }
-        }
-    }
     for (v, st) in stats.iter().enumerate() {
         let aspect = f64::from(st.width) / f64::from(st.height);
         vars.extend(view_domain(ls_lo, ls_hi, fov[v], fit_fov, aspect));
