@@ -23,21 +23,32 @@ fn simplify(
     structure: &[usize],
     x: &mut [f64],
 ) -> usize {
+    let on: Vec<(usize, f64)> = specs
+        .iter()
+        .enumerate()
+        .filter(|&(i, s)| {
+            (matches!(s.kind, ParamKind::Boolean) || structure.contains(&i)) && x[i] >= 0.5
+        })
+        .map(|(i, _)| (i, 0.0))
+        .collect();
+    keep_plainer(objective, x, &on)
+}
+
+/// Sets each parameter of `plainer` in turn to its plainer value and keeps it there when the
+/// views fit as well, within [`SIMPLER_TOLERANCE`] of the best so far; otherwise puts the
+/// value back. Returns the evaluations spent (the starting point's and one each).
+fn keep_plainer(objective: &FitObjective, x: &mut [f64], plainer: &[(usize, f64)]) -> usize {
     let mut spent = 1;
     let mut current = objective.value(x);
-    for (i, s) in specs.iter().enumerate() {
-        let optional = matches!(s.kind, ParamKind::Boolean) || structure.contains(&i);
-        if !optional || x[i] < 0.5 {
-            continue;
-        }
-        let on = x[i];
-        x[i] = 0.0;
-        let off = objective.value(x);
+    for &(i, plain) in plainer {
+        let kept = x[i];
+        x[i] = plain;
+        let value = objective.value(x);
         spent += 1;
-        if off <= current * (1.0 + SIMPLER_TOLERANCE) {
-            current = off.min(current);
+        if value <= current * (1.0 + SIMPLER_TOLERANCE) {
+            current = value.min(current);
         } else {
-            x[i] = on;
+            x[i] = kept;
         }
     }
     spent
@@ -53,8 +64,7 @@ pub(super) fn simplify_detail(
     generator: &dyn crate::generators::Generator,
     x: &mut [f64],
 ) -> usize {
-    let n = generator.params().len();
-    let outside: Vec<(usize, f64)> = (0..n)
+    let outside: Vec<(usize, f64)> = (0..generator.params().len())
         .filter_map(|i| {
             let (lo, hi) = generator.plain_range(i)?;
             let plain = x[i].clamp(lo, hi);
@@ -64,20 +74,7 @@ pub(super) fn simplify_detail(
     if outside.is_empty() {
         return 0;
     }
-    let mut spent = 1;
-    let mut current = objective.value(x);
-    for (i, plain) in outside {
-        let kept = x[i];
-        x[i] = plain;
-        let value = objective.value(x);
-        spent += 1;
-        if value <= current * (1.0 + SIMPLER_TOLERANCE) {
-            current = value.min(current);
-        } else {
-            x[i] = kept;
-        }
-    }
-    spent
+    keep_plainer(objective, x, &outside)
 }
 
 /// Stage-1 individuals tried at stage-2 resolution before stage 2 commits to one.
