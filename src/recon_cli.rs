@@ -474,7 +474,7 @@ pub fn reconstruct(a: &ReconstructArgs) -> Result<(), String> {
         model.lod.index()
     );
     report_rescue(&session, &result);
-    report_photo_match(&result, &masks, &a.images)?;
+    report_photo_match(&result, model.lod, &masks, &a.images)?;
     report_agreement(agreement, front_only);
     if let Some(note) = eval::windows_left_out_note(session.windows_left_out()) {
         println!("{note}");
@@ -623,20 +623,16 @@ fn photo_colors(
     Ok(Some(colors::to_part_colors(&found)))
 }
 
-/// The level of detail a fit is written at: [`Lod::High`], or the generator's
-/// [`generators::Capabilities::fitted_lod`] when that is finer.
-fn fitted_lod(generator: &dyn generators::Generator) -> Lod {
-    generator.capabilities().fitted_lod.max(Lod::High)
-}
-
-/// Prints how well the fitted model matches each photo (its photo-view IoU) and, when it does
-/// not, a warning saying what to try (issue 16: never a confident wrong answer).
+/// Prints how well the fitted model, at the detail `lod` it is written at, matches each photo
+/// (its photo-view IoU) and, when it does not, a warning saying what to try (issue 16: never a
+/// confident wrong answer).
 fn report_photo_match(
     result: &reconstruct::FitResult,
+    lod: Lod,
     masks: &[Mask],
     paths: &[PathBuf],
 ) -> Result<(), String> {
-    let ious = eval::result_photo_ious(result, masks).map_err(|e| e.to_string())?;
+    let ious = eval::result_photo_ious_at(result, masks, lod).map_err(|e| e.to_string())?;
     let names: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
     let each: Vec<String> = ious
         .iter()
@@ -893,10 +889,10 @@ fn reconstruct_tree(
     Ok(())
 }
 
-/// `--lod` as a level of detail; without it, the generator's export detail ([`fitted_lod`]).
+/// `--lod` as a level of detail; without it, the generator's export detail ([`eval::saved_lod`]).
 fn lod_of(a: &ReconstructArgs, generator: &dyn generators::Generator) -> Result<Lod, String> {
     match a.lod {
-        None => Ok(fitted_lod(generator)),
+        None => Ok(eval::saved_lod(generator)),
         Some(l) => {
             Lod::from_index(usize::from(l)).ok_or_else(|| format!("lod {l} is not in 0..=3"))
         }

@@ -142,8 +142,9 @@ async function runFit({ generator, start = null }) {
       r.params.length === start.length &&
       r.params.every((v, i) => Math.abs(v - start[i]) <= 1e-9 * Math.max(1, Math.abs(start[i])));
     // A fitted model opens at its generator's export detail at least (a building's windows
-    // are glass from HIGH up: the windows the photo shows).
-    const lod = Math.max(state.editor.lod, specOf(r.generator)?.fitted_lod ?? 0);
+    // are glass from HIGH up: the windows the photo shows), the detail its photo-view IoU was
+    // measured at (`r.lod`).
+    const lod = Math.max(state.editor.lod, r.lod ?? 0, specOf(r.generator)?.fitted_lod ?? 0);
     // A refit that kept the model keeps its colours too; a new fit brings the photos' colours.
     const colors = r.colors ?? (kept ? state.editor.colors : null);
     chooseGenerator(r.generator, { params: r.params, lod, preset: 'fitted', cameras: r.cameras, colors, carveId: r.carve_id ?? null });

@@ -69,7 +69,8 @@ export const REQUESTS = Object.freeze({
   // end, with one run, or when no other run did); `agreement_warning`: a sentence below the level.
   // `windows_note`: a sentence when the masks' window labels were left out (a model fitted to them
   // matched the outline less well than one fitted to the outline alone). `caveat`: what one photo
-  // cannot tell about the fitted shape (a mug's handle), after a fit from one photo.
+  // cannot tell about the fitted shape (a mug's handle), after a fit from one photo. `lod`: the
+  // detail `photo_ious` were measured at, the least the page opens the fitted model at.
   // `start`: the named generator's parameters to start from ("Refit from here"); a mask's
   // `focal_35mm` (from PHOTO_FOCAL) sets that view's field of view, else the default is used;
   // a mask's `windows` (labels as MASK_WINDOWS_* give them) adds the window term of a building.

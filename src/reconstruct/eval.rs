@@ -12,7 +12,7 @@ use super::FitError;
 use super::objective::render_coverage;
 use super::session::FitResult;
 use crate::camera::{View, ViewParams};
-use crate::generators::{Generator, Mesh};
+use crate::generators::{Generator, Lod, Mesh};
 use crate::loss;
 use crate::mask::Mask;
 use crate::render::{Renderer, Topology};
@@ -159,15 +159,48 @@ pub fn photo_match_warning(ious: &[f64], names: &[String], level: f64) -> Option
 }
 
 /// [`photo_view_ious`] of a fit's result: its model, at the fit's level of detail, through each
-/// fitted view against that view's mask (the masks the fit was given, in order). What the CLI
-/// prints and the page shows after a fit.
+/// fitted view against that view's mask (the masks the fit was given, in order). What the fit
+/// itself reads (its rescue runs' outline check); what the CLI prints and the page shows is
+/// [`result_photo_ious_at`] the detail the model is saved or shown at.
 pub fn result_photo_ious(result: &FitResult, masks: &[Mask]) -> Result<Vec<f64>, FitError> {
+    result_photo_ious_at(result, masks, result.model.lod)
+}
+
+/// [`result_photo_ious`] with the model generated at `lod`: the number the CLI prints for the
+/// model it writes ([`saved_lod`], or `--lod`) and the page for the model it opens, so that it
+/// is the IoU of what the user gets (a building's balconies and window frames stand out of its
+/// walls from [`Lod::High`] up, and the fit's result is [`Lod::Medium`]).
+pub fn result_photo_ious_at(
+    result: &FitResult,
+    masks: &[Mask],
+    lod: Lod,
+) -> Result<Vec<f64>, FitError> {
     let model = &result.model;
     let mesh = model
         .generator
-        .generate(&model.params, model.lod)
+        .generate(&model.params, lod)
         .map_err(|e| FitError(e.to_string()))?;
     photo_view_ious(&mesh, &result.views, masks)
+}
+
+/// The level of detail a fitted model is saved at (the CLI without `--lod`) and scored at by the
+/// benches: [`Lod::High`], or the generator's
+/// [`Capabilities::fitted_lod`](crate::generators::Capabilities::fitted_lod) when that is finer.
+pub fn saved_lod(generator: &dyn Generator) -> Lod {
+    generator.capabilities().fitted_lod.max(Lod::High)
+}
+
+/// [`result_photo_ious_at`] the [`saved_lod`]: what the CLI prints after a fit without `--lod`.
+pub fn saved_photo_ious(result: &FitResult, masks: &[Mask]) -> Result<Vec<f64>, FitError> {
+    result_photo_ious_at(result, masks, saved_lod(result.model.generator))
+}
+
+/// The level of detail the page opens a fitted model at, at least: its result's, or the
+/// generator's [`Capabilities::fitted_lod`](crate::generators::Capabilities::fitted_lod) when
+/// that is finer (the page's chosen detail when finer still).
+pub fn shown_lod(result: &FitResult) -> Lod {
+    let g = result.model.generator;
+    g.capabilities().fitted_lod.max(result.model.lod)
 }
 
 /// How alike two fits of the same photos are in 3D: the IoU-64 ([`iou64`], `side²`) of `b`
