@@ -808,7 +808,7 @@ pub struct BenchScore {
     /// The fit through its own fitted camera against the true mask.
     pub photo_iou: f64,
     /// The fit through its own fitted camera against the mask it was given (a photo's
-    /// automatic cut), as the CLI prints it ([`eval::saved_photo_ious`]): what the user sees.
+    /// automatic cut), as the CLI prints it ([`eval::result_photo_ious`]): what the user sees.
     pub mask_photo_iou: f64,
     /// For a photo: CIE76 ΔE*ab of the fitted model's wall and roof colours measured in the
     /// photo ([`crate::colors::estimate`]) against the colours the photo was drawn with
@@ -933,14 +933,14 @@ fn fit_scored(
                 tie_prior: run.model.generator.tie_prior(p),
                 iou64: fit_iou64(run, truth, view)?.0,
                 agreement: eval::fit_agreement(&result, run, 128)?,
-                photo_iou: eval::saved_photo_ious(run, std::slice::from_ref(&for_colours))?[0],
+                photo_iou: eval::result_photo_ious(run, std::slice::from_ref(&for_colours))?[0],
                 kept: run.loss == result.loss && *p == result.model.params,
                 shape,
             });
         }
     }
     let photo_iou = view_iou(&mesh, fitted, &true_mask(truth, view)?)?;
-    let mask_photo_iou = eval::saved_photo_ious(&result, std::slice::from_ref(&for_colours))?
+    let mask_photo_iou = eval::result_photo_ious(&result, std::slice::from_ref(&for_colours))?
         .first()
         .copied()
         .ok_or_else(|| FitError("a fit without a view".into()))?;

@@ -345,7 +345,7 @@ pub fn fit_case(
     let mut session = Session::new(config, masks.clone())?;
     let result = session.run()?;
     let mut warnings = seg.warnings.clone();
-    let cli_ious = eval::saved_photo_ious(&result, &masks)?;
+    let cli_ious = eval::result_photo_ious(&result, &masks)?;
     let level = eval::photo_match_level(result.model.generator);
     if let Some(w) = eval::photo_match_warning(&cli_ious, &["photo".into()], level) {
         warnings.push(w);
@@ -373,7 +373,7 @@ pub fn fit_case(
     if fit.each {
         for run in session.run_results().into_iter().flatten() {
             let s = score_fit(case, run)?;
-            let cut_iou = eval::saved_photo_ious(run, std::slice::from_ref(&seg.object))?
+            let cut_iou = eval::result_photo_ious(run, std::slice::from_ref(&seg.object))?
                 .first()
                 .copied()
                 .unwrap_or(0.0);

@@ -889,10 +889,16 @@ fn reconstruct_tree(
     Ok(())
 }
 
-/// `--lod` as a level of detail; without it, the generator's export detail ([`eval::saved_lod`]).
+/// The level of detail a fit is written at: [`Lod::High`], or the generator's
+/// [`generators::Capabilities::fitted_lod`] when that is finer.
+fn fitted_lod(generator: &dyn generators::Generator) -> Lod {
+    generator.capabilities().fitted_lod.max(Lod::High)
+}
+
+/// `--lod` as a level of detail; without it, the generator's export detail ([`fitted_lod`]).
 fn lod_of(a: &ReconstructArgs, generator: &dyn generators::Generator) -> Result<Lod, String> {
     match a.lod {
-        None => Ok(eval::saved_lod(generator)),
+        None => Ok(fitted_lod(generator)),
         Some(l) => {
             Lod::from_index(usize::from(l)).ok_or_else(|| format!("lod {l} is not in 0..=3"))
         }

@@ -558,8 +558,11 @@ impl Run {
         } = self
             .current_best()
             .ok_or_else(|| FitError("nothing was evaluated yet".into()))?;
-        let mut model = Model::new(g.name(), &x[..layout.n_gen], Lod::Medium)
-            .map_err(|e| FitError(e.to_string()))?;
+        // At the finest stage's detail: what the last stage fitted, and what the fit's checks
+        // (agreement, photo-view IoU) and the saved model see.
+        let lod = *self.config.lods.last().unwrap_or(&Lod::Medium);
+        let mut model =
+            Model::new(g.name(), &x[..layout.n_gen], lod).map_err(|e| FitError(e.to_string()))?;
         model.seed = Some(self.config.seed);
         let (w, h) = (self.masks[0].width(), self.masks[0].height());
         let views = (0..layout.n_views)

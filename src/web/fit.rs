@@ -52,9 +52,9 @@ struct ResultOut {
     evaluations: usize,
     /// One camera per photo, [`super::CAMERA_FLOATS`] numbers each, for `generateGlb`.
     cameras: Vec<f32>,
-    /// Each photo's photo-view IoU: the model at `lod` (the least detail the page opens it at,
-    /// `eval::shown_lod`) through its fitted camera against the photo's mask, don't-care
-    /// excluded (`eval::result_photo_ious_at`, what the CLI prints for the model it writes).
+    /// Each photo's photo-view IoU: the model at `lod` (the fit's finest stage's, the least
+    /// detail the page opens it at) through its fitted camera against the photo's mask,
+    /// don't-care excluded (`eval::result_photo_ious`, what the CLI prints).
     photo_ious: Vec<f64>,
     /// The level below which a photo is said not to be matched (the generator's
     /// `Capabilities::photo_match_level`).
@@ -333,9 +333,7 @@ impl FitSession {
             .iter()
             .flat_map(|v| export_camera(v, None).to_floats())
             .collect();
-        // Scored at the detail the page opens the model at, so the number is the shown model's.
-        let lod = eval::shown_lod(&r);
-        let photo_ious = eval::result_photo_ious_at(&r, &self.masks, lod).map_err(js)?;
+        let photo_ious = eval::result_photo_ious(&r, &self.masks).map_err(js)?;
         let match_level = eval::photo_match_level(r.model.generator);
         let agreement = self.session.agreement().map_err(js)?;
         let out = ResultOut {
@@ -351,7 +349,7 @@ impl FitSession {
             photo_ious,
             generator: r.model.generator.name(),
             params: r.model.params.clone(),
-            lod: lod as u8,
+            lod: r.model.lod as u8,
             seed: r.model.seed,
             loss: r.loss,
             evaluations: r.evaluations,

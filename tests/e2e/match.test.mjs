@@ -74,6 +74,8 @@ test('a cup fitted as a dish is said to match its photo, with the number', async
   assert.ok(iou >= 0.85 && iou <= 1, `photo-view IoU ${iou} in: ${said}`);
   assert.equal(await page.getAttribute('#fit-match', 'data-match'), 'good', said);
   assert.doesNotMatch(said, /does not match/);
+  // The number is the shown model's: it opens at the detail the fit ended at and measured it.
+  assert.equal(await page.inputValue('#lod'), '2', 'a fitted dish opens at HIGH detail');
   // What one photo of a mug cannot tell (the core's `one_view_caveat`), said after the numbers.
   assert.match(said, /One photo cannot tell a handle turned towards the camera from a shorter one/);
   assert.equal(await page.getAttribute('#fit-match', 'data-caveat'), 'one-view', said);
