@@ -623,6 +623,12 @@ fn photo_colors(
     Ok(Some(colors::to_part_colors(&found)))
 }
 
+/// The level of detail a fit is written at: [`Lod::High`], or the generator's
+/// [`generators::Capabilities::fitted_lod`] when that is finer.
+fn fitted_lod(generator: &dyn generators::Generator) -> Lod {
+    generator.capabilities().fitted_lod.max(Lod::High)
+}
+
 /// Prints how well the fitted model, at the detail `lod` it is written at, matches each photo
 /// (its photo-view IoU) and, when it does not, a warning saying what to try (issue 16: never a
 /// confident wrong answer).
@@ -887,12 +893,6 @@ fn reconstruct_tree(
         eprintln!("warning: {w}");
     }
     Ok(())
-}
-
-/// The level of detail a fit is written at: [`Lod::High`], or the generator's
-/// [`generators::Capabilities::fitted_lod`] when that is finer.
-fn fitted_lod(generator: &dyn generators::Generator) -> Lod {
-    generator.capabilities().fitted_lod.max(Lod::High)
 }
 
 /// `--lod` as a level of detail; without it, the generator's export detail ([`fitted_lod`]).

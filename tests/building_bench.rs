@@ -125,12 +125,11 @@ fn a_fit_adds_no_balconies_it_cannot_see() {
     check_seeded("shed-studio", Input::Mask, 0.95, 3);
 }
 
-/// The L with flat roofs from its mask at seed 3: the fit keeps a run whose HIGH detail (what
-/// is built from HIGH up: balconies, window frames) stands out where the building has none,
-/// IoU-64 0.734, while a run matching the mask about as well scores 0.903. The runs' 3D
-/// agreement was measured at MEDIUM detail, where those are not built, and said 0.990: no
-/// warning. At the detail the fit ends at, and saves, it is 0.804 and the fit says the shape is
-/// a guess.
+/// The L with flat roofs from its mask at seed 3: the fit keeps a run scoring IoU-64 0.734 (at
+/// HIGH detail, as it is saved), while another matching the mask about as well scores 0.903.
+/// The runs' 3D agreement was measured at MEDIUM detail, where balcony slabs, doors and stairs
+/// are not built, and said 0.990: no warning. At the detail the fit ends at and saves it is
+/// 0.804, and the fit says the shape is a guess.
 #[test]
 fn runs_are_compared_at_the_detail_the_fit_saves() {
     let s = check_seeded("l-flat", Input::Mask, 0.70, 3);

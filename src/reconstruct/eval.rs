@@ -221,7 +221,7 @@ pub const AGREEMENT_WINDOW: f64 = 0.25;
 /// 3, 0.845), and the 8 fits below 0.80 are not warned; since stage 3 takes off the balconies
 /// its views do not ask for and the roof's kind is a structure choice, 2 (0.795 and 0.960),
 /// and 3 of the 4 fits below 0.80 are not. Since the runs are compared at the detail the fit
-/// ends at (HIGH, where balconies and window frames are built; MEDIUM before), 4 (0.734,
+/// ends at (HIGH, where balcony slabs, doors and stairs are built; MEDIUM before), 4 (0.734,
 /// 0.795, 0.927 and 0.960: the paper's building from (30°, 8°) at seeds 0 and 1), and 1 of
 /// the 3 fits below 0.80 is not (the L with hip roofs read as a box on a gradient at seed 0,
 /// 0.722).

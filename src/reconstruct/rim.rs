@@ -223,11 +223,12 @@ impl EdgeField {
     }
 
     /// The offset along `n` (unit) from `p` of the strongest edge across `n` within the
-    /// range, nearer ones preferred; `None` when none is strong enough. Either way round: only
-    /// edges darker towards the ring's inside (the lip against the cup's shaded inside) lost the
-    /// Mitsuba dish photos' mean IoU-64 0.930 → 0.915 (seed 0, lens known; the serving bowl
-    /// from 55° 0.881 → 0.805), only brighter ones 0.913 (the mug from 60° 0.892 → 0.908, fitted
-    /// from 58° instead of 56°, but the serving bowl 0.701): glazes and lights differ.
+    /// range, nearer ones preferred; `None` when none is strong enough. Either way round:
+    /// only edges darker towards the ring's inside (the lip against the cup's shaded inside)
+    /// lost the Mitsuba dish photos' mean IoU-64 0.930 → 0.915 (seed 0, lens known; the
+    /// serving bowl from 55° 0.881 → 0.805), only brighter ones 0.913 (the mug from 60°
+    /// 0.892 → 0.908, fitted from 58° instead of 56°, but the serving bowl 0.701): glazes and
+    /// lights differ.
     fn edge_offset(&self, p: DVec2, n: DVec2) -> Option<f64> {
         let r = self.range;
         let steps = (r / STEP).ceil() as i64;
