@@ -252,11 +252,22 @@ pub(crate) fn read_view(path: &Path, opts: &segment::Options) -> Result<LoadedVi
     };
     if segmentation.is_none() {
         let obj: Vec<bool> = mask.values().iter().map(|&v| v >= 0.5).collect();
-        // An empty or full mask is the fit's one-line error; the rest is said here.
+        // An empty or full mask image is refused here, naming the file; the rest is said here.
         let area = obj.iter().filter(|&&o| o).count();
-        if area != 0 && area != obj.len() {
-            warnings = segment::mask_warnings(&obj, w as usize, h as usize);
+        if area == 0 {
+            return Err(at(
+                &"no object in this mask image: no pixel is white or opaque (the \
+                 object), grey 128 is don't care; draw the object in white, or give the photo",
+            ));
         }
+        if area == obj.len() {
+            return Err(at(
+                &"this mask image is all object: no background (black or \
+                 transparent) around it, so no outline to fit; crop wider or mark the \
+                 background black",
+            ));
+        }
+        warnings = segment::mask_warnings(&obj, w as usize, h as usize);
     }
     let fov = exif_fov(&bytes, mask.width(), mask.height());
     Ok(LoadedView {

@@ -246,8 +246,8 @@ fn bad_input_gives_one_line_and_failure() {
         args.extend_from_slice(&["-o", s(&out)]);
         check(&args, needle);
     };
-    recon(&[s(&empty)], "empty");
-    recon(&[s(&full)], "all object");
+    recon(&[s(&empty)], "empty.png: no object in this mask image");
+    recon(&[s(&full)], "full.png: this mask image is all object");
     recon(&[s(&tiny)], "1×1");
     recon(&[s(&text)], "not a readable image");
     recon(&[s(&a), s(&b)], "same size");
