@@ -251,22 +251,27 @@ pub(crate) fn read_view(path: &Path, opts: &segment::Options) -> Result<LoadedVi
         mask
     };
     if segmentation.is_none() {
+        // A mask image the fit cannot use is refused here, by the fit's own check
+        // (`views::check_mask`), naming the file and what to do; the rest is said here.
+        use reconstruct::views::MaskProblem;
+        match reconstruct::views::check_mask(&mask) {
+            Err(MaskProblem::Empty) => {
+                return Err(at(
+                    &"no object in this mask image: no pixel is white or opaque (the \
+                     object), grey 128 is don't care; draw the object in white, or give the \
+                     photo",
+                ));
+            }
+            Err(p @ MaskProblem::AllObject(_)) => {
+                return Err(at(&format!(
+                    "this mask image {p}; nothing black or transparent around the object: \
+                     crop wider or mark the background black"
+                )));
+            }
+            Err(p) => return Err(at(&format!("this mask image {p}"))),
+            Ok(_) => {}
+        }
         let obj: Vec<bool> = mask.values().iter().map(|&v| v >= 0.5).collect();
-        // An empty or full mask image is refused here, naming the file; the rest is said here.
-        let area = obj.iter().filter(|&&o| o).count();
-        if area == 0 {
-            return Err(at(
-                &"no object in this mask image: no pixel is white or opaque (the \
-                 object), grey 128 is don't care; draw the object in white, or give the photo",
-            ));
-        }
-        if area == obj.len() {
-            return Err(at(
-                &"this mask image is all object: no background (black or \
-                 transparent) around it, so no outline to fit; crop wider or mark the \
-                 background black",
-            ));
-        }
         warnings = segment::mask_warnings(&obj, w as usize, h as usize);
     }
     let fov = exif_fov(&bytes, mask.width(), mask.height());

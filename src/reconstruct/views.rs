@@ -355,14 +355,47 @@ pub struct MaskStats {
 /// Smallest image side the fit accepts.
 pub const MIN_SIDE: u32 = 8;
 
+/// Why a mask has no silhouette to fit ([`check_mask`]); its `Display` follows "mask N" or
+/// "this mask image".
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum MaskProblem {
+    /// Smaller than [`MIN_SIDE`] on a side: width, height.
+    TooSmall(u32, u32),
+    /// No object pixel.
+    Empty,
+    /// (Nearly) all object: the object's share of the pixels that count.
+    AllObject(f64),
+}
+
+impl std::fmt::Display for MaskProblem {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            MaskProblem::TooSmall(w, h) => write!(
+                f,
+                "is {w}×{h}; at least {MIN_SIDE}×{MIN_SIDE} pixels are needed"
+            ),
+            MaskProblem::Empty => write!(f, "is empty: no object pixels to fit"),
+            MaskProblem::AllObject(fill) => write!(
+                f,
+                "is all object ({:.0} % of the image): no silhouette to fit",
+                100.0 * fill
+            ),
+        }
+    }
+}
+
 /// Statistics of mask `index`. Errors when the image is smaller than [`MIN_SIDE`], has no object
 /// pixel, or is (nearly) all object — there is no silhouette to fit then.
 pub fn mask_stats(mask: &Mask, index: usize) -> Result<MaskStats, FitError> {
+    check_mask(mask).map_err(|p| FitError(format!("mask {index} {p}")))
+}
+
+/// [`mask_stats`] with the reason a mask cannot be fitted as a [`MaskProblem`], for callers
+/// that name the mask otherwise (the CLI, by its file).
+pub fn check_mask(mask: &Mask) -> Result<MaskStats, MaskProblem> {
     let (w, h) = (mask.width(), mask.height());
     if w < MIN_SIDE || h < MIN_SIDE {
-        return Err(FitError(format!(
-            "mask {index} is {w}×{h}; at least {MIN_SIDE}×{MIN_SIDE} pixels are needed"
-        )));
+        return Err(MaskProblem::TooSmall(w, h));
     }
     let (mut lo, mut hi) = (DVec2::splat(f64::MAX), DVec2::splat(f64::MIN));
     let (mut sum, mut cx, mut cy, mut cared) = (0.0, 0.0, 0.0, 0usize);
@@ -382,16 +415,11 @@ pub fn mask_stats(mask: &Mask, index: usize) -> Result<MaskStats, FitError> {
         }
     }
     if sum < 1.0 || lo.x > hi.x {
-        return Err(FitError(format!(
-            "mask {index} is empty: no object pixels to fit"
-        )));
+        return Err(MaskProblem::Empty);
     }
     let fill = sum / cared.max(1) as f64;
     if fill > 0.98 {
-        return Err(FitError(format!(
-            "mask {index} is all object ({:.0} % of the image): no silhouette to fit",
-            100.0 * fill
-        )));
+        return Err(MaskProblem::AllObject(fill));
     }
     Ok(MaskStats {
         width: w,
